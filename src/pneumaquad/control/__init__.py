@@ -1,0 +1,1 @@
+"""Controllers shared by the rig and the robot."""

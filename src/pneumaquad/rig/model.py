@@ -1,0 +1,51 @@
+"""Rig parameters and initial state for the compiled rig kernel."""
+
+import numpy as np
+
+from pneumaquad import layout as L
+from pneumaquad.actuator import initial_state, pack_parameters
+from pneumaquad.control.pid import pid_gains
+from pneumaquad.params.schema import RigSetup
+from pneumaquad.physics.force import gravity_force
+
+
+def pack_rig_parameters(setup: RigSetup) -> np.ndarray:
+    """Kernel parameter array (1, N_PARAMETERS) of a rig: actuator plus load and stops.
+
+    The moving mass is the load plus the piston/rod mass; gravity acts along the rod at
+    the rig's orientation (thesis 4.2.1: the board could be clamped in any orientation).
+    """
+    row = pack_parameters(setup.actuator)
+    rig = setup.rig
+    moving_mass = rig.load_mass + setup.actuator.cylinder.piston_mass
+    row[L.P_MOVING_MASS] = moving_mass
+    row[L.P_GRAVITY_FORCE] = gravity_force(moving_mass, rig.gravity, rig.orientation_angle)
+    row[L.P_STOP_STIFFNESS] = rig.end_stop_stiffness
+    row[L.P_STOP_DAMPING] = rig.end_stop_damping
+    row[L.P_SPACER] = 1.0 if rig.spacer else 0.0
+    return row[np.newaxis, :]
+
+
+def rig_initial_state(setup: RigSetup, params: np.ndarray) -> np.ndarray:
+    """Initial kernel state (1, N_STATES): the rig's initial position and pressures, at rest."""
+    rig = setup.rig
+    position = setup.actuator.cylinder.stroke if rig.spacer else rig.initial_position
+    state = initial_state(
+        params[0], position, rig.initial_cap_pressure, rig.initial_rod_pressure
+    )
+    return state[np.newaxis, :]
+
+
+def rig_controller_gains(setup: RigSetup) -> np.ndarray:
+    """PID gains of the rig's parameter file, with the valve's offset and range."""
+    controller, valve = setup.controller, setup.actuator.valve
+    return pid_gains(
+        controller.proportional_gain,
+        controller.integral_gain,
+        controller.derivative_gain,
+        controller.derivative_filter_time_constant,
+        controller.integral_limit,
+        valve.offset_voltage,
+        valve.min_voltage,
+        valve.max_voltage,
+    )

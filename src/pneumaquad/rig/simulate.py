@@ -1,0 +1,303 @@
+"""Running the rig: the fixed-step compiled loop and the adaptive stiff reference.
+
+Both integrators sample the same way: at every control step k the controller (or the
+open-loop signal) sets the valve command u_k from the state at t_k; the command is held
+until t_{k+1}; row k of the recording is the state at t_{k+1} with the command u_k.
+"""
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from scipy.integrate import solve_ivp
+
+from pneumaquad import layout as L
+from pneumaquad.actuator import supply_state
+from pneumaquad.control.pid import N_CONTROLLER_STATES, pid_update
+from pneumaquad.kernel import (
+    end_stop_force,
+    finish_outputs,
+    friction_of,
+    rig_rates,
+    step_rigs,
+    supply_pressure_now,
+)
+from pneumaquad.params.schema import RigSetup
+from pneumaquad.physics.friction import SET_VALUED_MODELS
+from pneumaquad.recording import RunRecorder
+from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
+
+RIG_COLUMNS = (
+    "time [s]",
+    "command [V]",
+    "reference position [m]",
+    "position [m]",
+    "velocity [m/s]",
+    "cap pressure [Pa]",
+    "rod pressure [Pa]",
+    "cap temperature [K]",
+    "rod temperature [K]",
+    "cap mass flow [kg/s]",
+    "rod mass flow [kg/s]",
+    "cap mass [kg]",
+    "rod mass [kg]",
+    "friction force [N]",
+    "pneumatic force [N]",
+    "end stop force [N]",
+    "supply pressure [Pa]",
+    "supply mass flow [kg/s]",
+    "air consumed [kg]",
+)
+N_COLUMNS = len(RIG_COLUMNS)
+
+#: Normal density of air (DIN 1343: 273.15 K, 101325 Pa) with R = 287 J/(kg K) [kg/m^3].
+NORMAL_DENSITY = 101325.0 / (287.0 * 273.15)
+
+
+class ReferenceSolverError(ValueError):
+    """The adaptive reference cannot integrate this configuration."""
+
+
+@njit(cache=True)
+def write_row(row, sample_time, command, reference, p, s, out, supply_pressure):
+    """Fill one recording row (layout of RIG_COLUMNS) from the state after a step."""
+    row[0] = sample_time
+    row[1] = command
+    row[2] = reference
+    row[3] = s[L.S_POSITION]
+    row[4] = s[L.S_VELOCITY]
+    row[5] = s[L.S_CAP_PRESSURE]
+    row[6] = s[L.S_ROD_PRESSURE]
+    row[7] = out[L.O_CAP_TEMPERATURE]
+    row[8] = out[L.O_ROD_TEMPERATURE]
+    row[9] = out[L.O_CAP_FLOW]
+    row[10] = out[L.O_ROD_FLOW]
+    row[11] = s[L.S_CAP_MASS]
+    row[12] = s[L.S_ROD_MASS]
+    row[13] = out[L.O_FRICTION_FORCE]
+    row[14] = out[L.O_PNEUMATIC_FORCE]
+    row[15] = out[L.O_END_STOP_FORCE]
+    row[16] = supply_pressure
+    row[17] = out[L.O_SUPPLY_DRAW]
+    row[18] = s[L.S_AIR_CONSUMED]
+
+
+@njit(cache=True)
+def run_rig_chunk(
+    params, state, supply, gains, controller, closed_loop, signal, start, count,
+    control_step, substeps, rows,
+):
+    """Run ``count`` control steps from index ``start``; fill rows[0:count]."""
+    commands = np.zeros(1)
+    outputs = np.zeros((1, L.N_OUTPUTS))
+    for j in range(count):
+        k = start + j
+        if closed_loop:
+            reference = signal[k]
+            command = pid_update(gains, controller, reference, state[0, L.S_POSITION],
+                                 control_step)
+        else:
+            reference = math.nan
+            command = signal[k]
+        commands[0] = command
+        step_rigs(params, state, commands, control_step, substeps, supply, outputs)
+        write_row(rows[j], (k + 1) * control_step, command, reference, params[0], state[0],
+                  outputs[0], supply_pressure_now(params[0], supply))
+
+
+@dataclass
+class RigResult:
+    """Outcome of a rig run: the recording as columns, and how the run went."""
+
+    recording: dict[str, np.ndarray]
+    interrupted: bool
+    wall_time: float
+    integrator: str
+
+
+ProgressCallback = Callable[[int, int], None]
+
+
+def _as_columns(rows: np.ndarray) -> dict[str, np.ndarray]:
+    columns = {name: rows[:, index].copy() for index, name in enumerate(RIG_COLUMNS)}
+    columns["air consumed [NL]"] = columns["air consumed [kg]"] / NORMAL_DENSITY * 1000.0
+    return columns
+
+
+def _record(recorder: RunRecorder | None, block: np.ndarray) -> None:
+    if recorder is not None:
+        recorder.append(block)
+
+
+def simulate_rig(
+    setup: RigSetup,
+    signal: np.ndarray,
+    closed_loop: bool,
+    recorder: RunRecorder | None = None,
+    progress: ProgressCallback | None = None,
+    chunk_steps: int = 500,
+) -> RigResult:
+    """Simulate the rig with the integrator named in ``setup.simulation.integrator``.
+
+    Parameters
+    ----------
+    setup : RigSetup
+        Validated rig parameters.
+    signal : numpy.ndarray
+        Per control step: valve command [V] (open loop) or position reference [m]
+        (closed loop).
+    closed_loop : bool
+        Whether ``signal`` is a position reference for the PID.
+    recorder : RunRecorder, optional
+        Receives rows (RIG_COLUMNS) as they are computed, so an interrupted run keeps
+        them.
+    progress : callable, optional
+        Called with (steps done, total steps).
+    chunk_steps : int
+        Steps per compiled call; Ctrl-C is honoured between chunks.
+
+    Returns
+    -------
+    RigResult
+        On KeyboardInterrupt the result holds the rows computed so far and
+        ``interrupted`` is True.
+    """
+    if setup.simulation.integrator != "fixed":
+        return simulate_rig_reference(setup, signal, closed_loop, recorder, progress)
+    params = pack_rig_parameters(setup)
+    state = rig_initial_state(setup, params)
+    supply = supply_state(setup.actuator)
+    gains = rig_controller_gains(setup)
+    controller = np.zeros(N_CONTROLLER_STATES)
+    total = int(signal.shape[0])
+    rows = np.zeros((total, N_COLUMNS))
+    dt = setup.simulation.control_step
+    substeps = setup.simulation.substeps
+    done = 0
+    interrupted = False
+    started = time.perf_counter()
+    try:
+        while done < total:
+            count = min(chunk_steps, total - done)
+            run_rig_chunk(params, state, supply, gains, controller, closed_loop,
+                          np.asarray(signal, dtype=float), done, count, dt, substeps,
+                          rows[done : done + count])
+            _record(recorder, rows[done : done + count])
+            done += count
+            if progress is not None:
+                progress(done, total)
+    except KeyboardInterrupt:
+        interrupted = True
+    wall = time.perf_counter() - started
+    return RigResult(_as_columns(rows[:done]), interrupted, wall, "fixed")
+
+
+def _tolerance_scales(params: np.ndarray) -> np.ndarray:
+    """Typical magnitude of each state, to turn the relative atol into absolute ones."""
+    p = params[0]
+    scales = np.ones(L.N_STATES)
+    scales[L.S_CAP_PRESSURE] = p[L.P_PS]
+    scales[L.S_ROD_PRESSURE] = p[L.P_PS]
+    mass = p[L.P_PS] * p[L.P_CAP_AREA] * (p[L.P_STROKE] + p[L.P_CAP_DEAD]) / (
+        p[L.P_R] * p[L.P_TS])
+    scales[L.S_CAP_MASS] = mass
+    scales[L.S_ROD_MASS] = mass
+    scales[L.S_SPOOL] = 1.0
+    scales[L.S_BRISTLE] = max(p[L.P_FS], 1e-3) / max(p[L.P_SIGMA0], 1.0)
+    scales[L.S_AIR_CONSUMED] = mass
+    scales[L.S_POSITION] = p[L.P_STROKE]
+    scales[L.S_VELOCITY] = 0.1
+    return scales
+
+
+def simulate_rig_reference(
+    setup: RigSetup,
+    signal: np.ndarray,
+    closed_loop: bool,
+    recorder: RunRecorder | None = None,
+    progress: ProgressCallback | None = None,
+) -> RigResult:
+    """Adaptive stiff reference: ``scipy.integrate.solve_ivp`` (Radau or LSODA).
+
+    Each control interval is integrated separately with the command held, from the same
+    sampled state as the fixed-step loop, so the two differ only by integration error.
+    The right-hand side is :func:`pneumaquad.kernel.rig_rates`, built from the same
+    physics functions as the compiled kernels. The set-valued Coulomb models have no ODE
+    form and are refused.
+    """
+    method = {"radau": "Radau", "lsoda": "LSODA"}.get(setup.simulation.integrator, "Radau")
+    params = pack_rig_parameters(setup)
+    p = params[0]
+    if int(p[L.P_FRICTION_MODEL]) in SET_VALUED_MODELS:
+        raise ReferenceSolverError(
+            f"simulation.integrator = {setup.simulation.integrator!r} needs a smooth friction "
+            f"model; friction.model = {setup.actuator.friction.model!r} is set-valued "
+            "(use 'fixed', or friction.model = 'stribeck_tanh', 'lugre' or 'viscous')"
+        )
+    y = rig_initial_state(setup, params)[0].copy()
+    supply = supply_state(setup.actuator)
+    gains = rig_controller_gains(setup)
+    controller = np.zeros(N_CONTROLLER_STATES)
+    dt = setup.simulation.control_step
+    rtol = setup.simulation.relative_tolerance
+    atol = setup.simulation.absolute_tolerance * _tolerance_scales(params)
+    total = int(signal.shape[0])
+    rows = np.zeros((total, N_COLUMNS))
+    out = np.zeros(L.N_OUTPUTS)
+    done = 0
+    flushed = 0
+    interrupted = False
+    started = time.perf_counter()
+    spacer = p[L.P_SPACER] == 1.0
+    try:
+        for k in range(total):
+            if closed_loop:
+                reference = float(signal[k])
+                command = pid_update(gains, controller, reference, y[L.S_POSITION], dt)
+            else:
+                reference = math.nan
+                command = float(signal[k])
+            supply_pressure = supply_pressure_now(p, supply)
+            before = y.copy()
+            solution = solve_ivp(
+                lambda _t, state, u=command, ps=supply_pressure: rig_rates(p, state, u, ps),
+                (0.0, dt), y, method=method, rtol=rtol, atol=atol,
+            )
+            if not solution.success:
+                raise ReferenceSolverError(f"solve_ivp failed at t = {k * dt:.4f} s: "
+                                           f"{solution.message}")
+            y = solution.y[:, -1].copy()
+            drawn = y[L.S_AIR_CONSUMED] - before[L.S_AIR_CONSUMED]
+            supply[L.SUPPLY_DRAWN_MASS] += drawn
+            if supply[L.SUPPLY_MODEL] == 1.0:
+                supply[L.SUPPLY_TANK_PRESSURE] -= (
+                    supply[L.SUPPLY_GAS_CONSTANT] * supply[L.SUPPLY_TANK_TEMPERATURE] * drawn
+                    / supply[L.SUPPLY_TANK_VOLUME])
+            out[:] = 0.0
+            out[L.O_CAP_FLOW] = y[L.S_CAP_MASS] - before[L.S_CAP_MASS]
+            out[L.O_ROD_FLOW] = y[L.S_ROD_MASS] - before[L.S_ROD_MASS]
+            out[L.O_SUPPLY_DRAW] = drawn
+            finish_outputs(p, y, y[L.S_POSITION], dt, out)
+            if spacer:
+                out[L.O_END_STOP_FORCE] = -(out[L.O_PNEUMATIC_FORCE] + p[L.P_GRAVITY_FORCE])
+            else:
+                out[L.O_FRICTION_FORCE] = friction_of(p, y[L.S_VELOCITY], y[L.S_BRISTLE])
+                out[L.O_END_STOP_FORCE] = end_stop_force(
+                    y[L.S_POSITION], y[L.S_VELOCITY], p[L.P_STROKE], p[L.P_STOP_STIFFNESS],
+                    p[L.P_STOP_DAMPING])
+            write_row(rows[k], (k + 1) * dt, command, reference, p, y, out,
+                      supply_pressure_now(p, supply))
+            done = k + 1
+            if done - flushed >= 100 or done == total:
+                _record(recorder, rows[flushed:done])
+                flushed = done
+                if progress is not None:
+                    progress(done, total)
+    except KeyboardInterrupt:
+        interrupted = True
+        _record(recorder, rows[flushed:done])
+    wall = time.perf_counter() - started
+    return RigResult(_as_columns(rows[:done]), interrupted, wall, setup.simulation.integrator)

@@ -1,0 +1,298 @@
+"""Equivalent-area and input-pressure fitting for the proportional valve.
+
+Reimplements the procedure of Daepp (2011), section 4.2.3 and Appendix B.2
+("Equivalent Area Curve Fitting Tools", thesis text line ~1746): hand-tuned
+discharge coefficients at 19 centred valve voltages are multiplied by a linear
+geometric orifice-area model, and each side of the valve offset is fitted with
+a fourth-order polynomial. The input-pressure curve is the offset, scaled tanh
+of eqs. (4.2.7)-(4.2.11).
+
+All voltages here are *centred* (adjusted) voltages, i.e. the command minus
+the 5.25 V valve offset, in [V]. Script line numbers ``l.N`` refer to the
+numbered MATLAB listing in App. B.2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.optimize import least_squares
+
+#: Valve offset voltage the centred voltages are measured from [V].
+VALVE_OFFSET_VOLTAGE = 5.25
+
+_STEPS = np.array([0.15, 0.35, 0.55, 0.75, 1.25, 1.75, 2.75, 3.75, 4.75])
+
+#: Centred valve voltages of the tuning steps [V] (App. B.2 l.5-7): nine negative,
+#: zero, nine positive; index 9 is the valve offset.
+THESIS_VOLTAGES: np.ndarray = np.concatenate([-_STEPS[::-1], [0.0], _STEPS])
+
+#: Hand-tuned discharge coefficients of port 1 [-] (App. B.2 l.11, 50 psig supply).
+PORT1_DISCHARGE_COEFFICIENTS: np.ndarray = np.array(
+    [0.08, 0.10, 0.13, 0.15, 0.15, 0.15, 0.15, 0.12, 0.13, 0.11,
+     0.07, 0.06, 0.10, 0.12, 0.165, 0.175, 0.16, 0.14, 0.11]
+)  # fmt: skip
+
+#: Hand-tuned discharge coefficients of port 2 [-] (App. B.2 l.10, 50 psig supply).
+PORT2_DISCHARGE_COEFFICIENTS: np.ndarray = np.array(
+    [0.115, 0.14, 0.18, 0.20, 0.20, 0.19, 0.18, 0.17, 0.19, 0.09,
+     0.06, 0.05, 0.06, 0.09, 0.125, 0.135, 0.12, 0.09, 0.075]
+)  # fmt: skip
+
+#: Full-open orifice area of the geometric model, 2 mm x 5 mm [m^2] (App. B.2 l.13).
+MAX_ORIFICE_AREA = 0.002 * 0.005
+#: Centred voltage at which the geometric model reaches ``MAX_ORIFICE_AREA`` [V] (l.13).
+FULL_SCALE_VOLTAGE = 5.0
+#: Leak area added at the valve offset, x = 0 [m^2] (App. B.2 l.12).
+LEAK_AREA = 2e-7
+
+#: Polynomial order of each side of the equivalent-area curve (App. B.2 l.26-30).
+POLYNOMIAL_ORDER = 4
+
+#: Port 2 tanh cutoffs used in the Simulink model [V] (App. B.1.2 Port_2 l.21-22).
+PORT2_HIGH_CUTOFF = 1.25
+PORT2_LOW_CUTOFF = -0.75
+
+
+def geometric_area(
+    voltages: ArrayLike,
+    max_area: float = MAX_ORIFICE_AREA,
+    full_scale_voltage: float = FULL_SCALE_VOLTAGE,
+) -> np.ndarray:
+    """Linear geometric orifice area ``|max_area / full_scale_voltage * x|`` (App. B.2 l.13).
+
+    Parameters
+    ----------
+    voltages
+        Centred valve voltages x [V].
+    max_area
+        Orifice area at ``|x| = full_scale_voltage`` [m^2].
+    full_scale_voltage
+        Centred voltage of the fully open valve [V].
+
+    Returns
+    -------
+    np.ndarray
+        Geometric orifice area [m^2].
+    """
+    x = np.asarray(voltages, dtype=float)
+    return np.abs(max_area / full_scale_voltage * x)
+
+
+def equivalent_areas(
+    discharge_coefficients: ArrayLike,
+    voltages: ArrayLike,
+    max_area: float = MAX_ORIFICE_AREA,
+    full_scale_voltage: float = FULL_SCALE_VOLTAGE,
+    leak_area: float = LEAK_AREA,
+) -> np.ndarray:
+    """Equivalent orifice areas ``Aeq = cd * (A_geom + A_leak)`` (App. B.2 l.12-16).
+
+    The leak area is added only at the valve offset (``x == 0``), as in the
+    thesis script, where ``AL`` is zero except at index 10 (x = 0).
+
+    Parameters
+    ----------
+    discharge_coefficients
+        Discharge coefficient cd at each voltage [-].
+    voltages
+        Centred valve voltages x [V], same shape as ``discharge_coefficients``.
+    max_area
+        Full-open geometric orifice area [m^2].
+    full_scale_voltage
+        Centred voltage of the fully open valve [V].
+    leak_area
+        Leak area at ``x == 0`` [m^2].
+
+    Returns
+    -------
+    np.ndarray
+        Equivalent orifice areas [m^2].
+    """
+    cd = np.asarray(discharge_coefficients, dtype=float)
+    x = np.asarray(voltages, dtype=float)
+    if cd.shape != x.shape:
+        raise ValueError(f"shape mismatch: cd {cd.shape} vs voltages {x.shape}")
+    leak = np.where(x == 0.0, leak_area, 0.0)
+    return cd * (geometric_area(x, max_area, full_scale_voltage) + leak)
+
+
+def fit_equivalent_area_polynomials(
+    voltages: ArrayLike, areas: ArrayLike, order: int = POLYNOMIAL_ORDER
+) -> tuple[np.ndarray, np.ndarray]:
+    """Fit one polynomial per side of the valve offset (App. B.2 l.18-30).
+
+    Each side is an ordinary least-squares fit (``np.polyfit``) of the points
+    with ``x <= 0`` (negative side) or ``x >= 0`` (positive side); the point at
+    ``x == 0`` belongs to both, so the two curves meet near the leak area.
+
+    Parameters
+    ----------
+    voltages
+        Centred valve voltages x [V].
+    areas
+        Equivalent orifice areas at those voltages [m^2].
+    order
+        Polynomial order of each side.
+
+    Returns
+    -------
+    tuple[np.ndarray, np.ndarray]
+        ``(negative, positive)`` coefficients [m^2 / V^k], highest power first
+        (``np.polyval`` order).
+    """
+    x = np.asarray(voltages, dtype=float)
+    a = np.asarray(areas, dtype=float)
+    if x.shape != a.shape or x.ndim != 1:
+        raise ValueError("voltages and areas must be 1-D arrays of equal length")
+    negative = x <= 0.0
+    positive = x >= 0.0
+    for side, mask in (("negative", negative), ("positive", positive)):
+        if np.count_nonzero(mask) <= order:
+            raise ValueError(f"need more than {order} points on the {side} side")
+    return np.polyfit(x[negative], a[negative], order), np.polyfit(x[positive], a[positive], order)
+
+
+def thesis_port_polynomials(port: int) -> tuple[np.ndarray, np.ndarray]:
+    """Run the App. B.2 procedure on the printed data of one valve port.
+
+    Parameters
+    ----------
+    port
+        Valve port, 1 or 2.
+
+    Returns
+    -------
+    tuple[np.ndarray, np.ndarray]
+        ``(negative, positive)`` coefficients [m^2 / V^k], highest power first.
+        For port 2 these round to the coefficients printed in App. B.1.2
+        (Port_2 l.44 and l.48).
+    """
+    coefficients = {1: PORT1_DISCHARGE_COEFFICIENTS, 2: PORT2_DISCHARGE_COEFFICIENTS}
+    if port not in coefficients:
+        raise ValueError(f"port must be 1 or 2, got {port!r}")
+    areas = equivalent_areas(coefficients[port], THESIS_VOLTAGES)
+    return fit_equivalent_area_polynomials(THESIS_VOLTAGES, areas)
+
+
+def evaluate_equivalent_area(
+    negative: ArrayLike, positive: ArrayLike, centered_voltage: ArrayLike
+) -> np.ndarray:
+    """Evaluate the two-sided equivalent-area curve, clipped at zero.
+
+    Follows App. B.1.2 Port_2 l.42-50: the positive polynomial for ``x > 0``
+    and the negative one otherwise.
+
+    Parameters
+    ----------
+    negative, positive
+        Polynomial coefficients, highest power first [m^2 / V^k].
+    centered_voltage
+        Centred valve voltage x [V]; scalar or array.
+
+    Returns
+    -------
+    np.ndarray
+        Equivalent orifice area [m^2], ``>= 0``, same shape as the input.
+    """
+    x = np.asarray(centered_voltage, dtype=float)
+    area = np.where(x > 0.0, np.polyval(positive, x), np.polyval(negative, x))
+    return np.maximum(area, 0.0)
+
+
+def input_pressure(
+    centered_voltage: ArrayLike,
+    supply_pressure: float,
+    exhaust_pressure: float,
+    high_cutoff: float,
+    low_cutoff: float,
+) -> np.ndarray:
+    """Effective valve input pressure, eqs. (4.2.7)-(4.2.11).
+
+    ``P = y_off + C_scale * tanh(K * (u - x_off))`` with
+    ``y_off = (Ps + Pe)/2``, ``x_off = (Chp + Clp)/2``,
+    ``C_scale = sign(Chp - Clp) (Ps - Pe)/2`` and ``K = 2 pi / |Clp - Chp|``
+    (also App. B.1.2 Port_2 l.30-35). The formula is linear in the pressures,
+    so any consistent pressure unit works; SI [Pa] is intended.
+
+    Parameters
+    ----------
+    centered_voltage
+        Centred valve voltage u [V]; scalar or array.
+    supply_pressure, exhaust_pressure
+        Supply and exhaust pressures Ps, Pe [Pa].
+    high_cutoff, low_cutoff
+        Voltages Chp, Clp at which the curve leaves the supply and the exhaust
+        pressure plateaus [V]; must differ.
+
+    Returns
+    -------
+    np.ndarray
+        Input pressure [Pa], same shape as ``centered_voltage``.
+    """
+    if high_cutoff == low_cutoff:
+        raise ValueError("high and low cutoffs must differ")
+    u = np.asarray(centered_voltage, dtype=float)
+    y_offset = 0.5 * (supply_pressure + exhaust_pressure)
+    x_offset = 0.5 * (high_cutoff + low_cutoff)
+    scale = np.sign(high_cutoff - low_cutoff) * 0.5 * (supply_pressure - exhaust_pressure)
+    gain = 2.0 * np.pi / abs(low_cutoff - high_cutoff)
+    return y_offset + scale * np.tanh(gain * (u - x_offset))
+
+
+def fit_input_pressure_curve(
+    centered_voltages: ArrayLike,
+    pressures: ArrayLike,
+    supply_pressure: float,
+    exhaust_pressure: float,
+) -> tuple[float, float]:
+    """Least-squares fit of the tanh cutoffs to measured input pressures (sec. 4.2.3).
+
+    Ps and Pe are fixed; only the two cutoffs are fitted, parametrised as
+    centre and signed width so the fit never passes through ``Chp == Clp``.
+    The sign of the slope (supply on the positive or negative side) is taken
+    from the data.
+
+    Parameters
+    ----------
+    centered_voltages
+        Centred valve voltages [V].
+    pressures
+        Steady-state input pressures at those voltages [Pa].
+    supply_pressure, exhaust_pressure
+        Supply and exhaust pressures [Pa].
+
+    Returns
+    -------
+    tuple[float, float]
+        ``(high_cutoff, low_cutoff)`` [V].
+    """
+    u = np.asarray(centered_voltages, dtype=float).ravel()
+    p = np.asarray(pressures, dtype=float).ravel()
+    if u.shape != p.shape or u.size < 2:
+        raise ValueError("need at least two (voltage, pressure) pairs of equal length")
+    span = supply_pressure - exhaust_pressure
+    if span == 0.0:
+        raise ValueError("supply and exhaust pressures must differ")
+
+    # Initial guess: centre where the pressure crosses the mid level, sign from
+    # the correlation of pressure with voltage, width a quarter of the range.
+    mid = 0.5 * (supply_pressure + exhaust_pressure)
+    direction = float(np.sign(np.sum((u - u.mean()) * (p - p.mean())) * span)) or 1.0
+    centre0 = float(u[np.argmin(np.abs(p - mid))])
+    width0 = max(0.25 * float(np.ptp(u)), 1e-3)
+
+    def residuals(params: np.ndarray) -> np.ndarray:
+        centre, log_width = params
+        width = np.exp(log_width)
+        high = centre + direction * width / 2.0
+        low = centre - direction * width / 2.0
+        model = input_pressure(u, supply_pressure, exhaust_pressure, high, low)
+        return (model - p) / span
+
+    result = least_squares(residuals, x0=[centre0, np.log(width0)], method="lm")
+    centre, log_width = result.x
+    width = float(np.exp(log_width))
+    high = float(centre + direction * width / 2.0)
+    low = float(centre - direction * width / 2.0)
+    return high, low

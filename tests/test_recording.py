@@ -1,0 +1,179 @@
+"""Tests of run folders, recordings, summaries and plots."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pneumaquad import plotting
+from pneumaquad.recording import (
+    RunRecorder,
+    create_run_folder,
+    read_recording,
+    write_summary,
+)
+
+COLUMNS = ["time [s]", "position [m]", "cap pressure [Pa]"]
+
+
+def _block(start: int, n: int) -> np.ndarray:
+    t = np.arange(start, start + n) * 1e-3
+    return np.column_stack([t, np.sin(t) / 3.0, 101325.0 + np.pi * t])
+
+
+def test_create_run_folder_generated_names_are_unique(tmp_path: Path) -> None:
+    first = create_run_folder(None, "step", base=tmp_path)
+    second = create_run_folder(None, "step", base=tmp_path)
+    assert first != second
+    assert first.is_dir() and second.is_dir()
+    assert first.parent == tmp_path and first.name.startswith("step-")
+
+
+def test_create_run_folder_explicit_output(tmp_path: Path) -> None:
+    out = tmp_path / "a" / "b"
+    assert create_run_folder(out, "step") == out
+    assert out.is_dir()
+    assert create_run_folder(out, "step") == out  # existing folder is fine
+
+
+def test_csv_readable_before_close(tmp_path: Path) -> None:
+    recorder = RunRecorder(tmp_path, COLUMNS)
+    block = _block(0, 5)
+    recorder.append(block)
+    recorder.append(_block(5, 3))
+    assert recorder.rows_written == 8
+    with (tmp_path / "recording.csv").open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    assert rows[0] == COLUMNS
+    assert len(rows) == 9
+    # Full precision: values round-trip exactly.
+    np.testing.assert_array_equal(np.array(rows[1:6], dtype=float), block)
+    assert not (tmp_path / "recording.parquet").exists()
+    data = read_recording(tmp_path)  # falls back to CSV
+    assert data["time [s]"].shape == (8,)
+    recorder.close()
+
+
+def test_parquet_equals_csv_after_close(tmp_path: Path) -> None:
+    with RunRecorder(tmp_path, COLUMNS) as recorder:
+        recorder.append(_block(0, 10))
+        recorder.append(_block(10, 1)[0])  # a single 1-D row
+    assert recorder.closed
+    from_parquet = read_recording(tmp_path / "recording.parquet")
+    from_csv = read_recording(tmp_path / "recording.csv")
+    assert list(from_parquet) == COLUMNS == list(from_csv)
+    for name in COLUMNS:
+        np.testing.assert_array_equal(from_parquet[name], from_csv[name])
+        assert from_parquet[name].dtype == np.float64
+    np.testing.assert_array_equal(read_recording(tmp_path)["time [s]"], _block(0, 11)[:, 0])
+
+
+def test_exception_inside_with_leaves_files_and_reraises(tmp_path: Path) -> None:
+    with pytest.raises(RuntimeError, match="boom"), RunRecorder(tmp_path, COLUMNS) as recorder:
+        recorder.append(_block(0, 4))
+        raise RuntimeError("boom")
+    assert (tmp_path / "recording.csv").exists()
+    assert (tmp_path / "recording.parquet").exists()
+    assert read_recording(tmp_path / "recording.parquet")["position [m]"].shape == (4,)
+
+
+def test_keyboard_interrupt_is_not_swallowed(tmp_path: Path) -> None:
+    with pytest.raises(KeyboardInterrupt), RunRecorder(tmp_path, COLUMNS) as recorder:
+        recorder.append(_block(0, 2))
+        raise KeyboardInterrupt
+    assert read_recording(tmp_path)["time [s]"].shape == (2,)
+
+
+def test_empty_recording_and_bad_shapes(tmp_path: Path) -> None:
+    with RunRecorder(tmp_path, COLUMNS) as recorder, pytest.raises(ValueError):
+        recorder.append(np.zeros((2, 2)))
+    assert recorder.rows_written == 0
+    assert read_recording(tmp_path)["time [s]"].shape == (0,)
+    assert read_recording(tmp_path / "recording.csv")["time [s]"].shape == (0,)
+    with pytest.raises(RuntimeError):
+        recorder.append(_block(0, 1))
+
+
+def test_summary_handles_numpy_and_nan(tmp_path: Path) -> None:
+    path = write_summary(
+        tmp_path,
+        {
+            "rmse [m]": np.float64(0.0012),
+            "steps": np.int64(3),
+            "ok": np.bool_(True),
+            "missing": float("nan"),
+            "series": np.array([1.0, np.nan, np.inf]),
+            "nested": {"gain": np.float32(0.5), "path": tmp_path},
+        },
+    )
+    assert path == tmp_path / "summary.json"
+    text = path.read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    loaded = json.loads(text)
+    assert loaded["rmse [m]"] == 0.0012
+    assert loaded["steps"] == 3
+    assert loaded["ok"] is True
+    assert loaded["missing"] is None
+    assert loaded["series"] == [1.0, None, None]
+    assert loaded["nested"]["gain"] == 0.5
+    assert loaded["nested"]["path"] == str(tmp_path)
+
+
+def _synthetic_recording(n: int = 400, delay: float = 0.0) -> dict[str, np.ndarray]:
+    psi = 6894.757
+    t = np.linspace(0.0, 4.0, n)
+    command = np.where(t < 1.0, 0.25, 6.5)
+    position = 0.1 * (1.0 - np.exp(-np.clip(t - 1.0 - delay, 0.0, None) / 0.3))
+    return {
+        "time [s]": t,
+        "command [V]": command,
+        "reference position [m]": np.where(t < 1.0, 0.0, 0.1),
+        "position [m]": position,
+        "cap pressure [Pa]": (14.7 + 50.0 * position / 0.1) * psi,
+        "rod pressure [Pa]": (64.7 - 45.0 * position / 0.1) * psi,
+        "supply pressure [Pa]": np.full(n, 64.7 * psi),
+    }
+
+
+def test_plots_write_png(tmp_path: Path) -> None:
+    rec = _synthetic_recording()
+    png_magic = b"\x89PNG"
+    out = plotting.plot_rig_run(rec, tmp_path / "run.png", title="Synthetic step")
+    assert out.read_bytes()[:4] == png_magic and out.stat().st_size > 1000
+
+    minimal = {"time [s]": rec["time [s]"], "position [m]": rec["position [m]"]}
+    out = plotting.plot_rig_run(minimal, tmp_path / "minimal.png")
+    assert out.stat().st_size > 1000
+
+    out = plotting.plot_comparison(
+        {"measured": rec, "simulated": _synthetic_recording(300, delay=0.1)},
+        tmp_path / "sub" / "cmp.png",
+        title="Comparison",
+    )
+    assert out.read_bytes()[:4] == png_magic and out.stat().st_size > 1000
+
+    v = np.linspace(-0.5, 0.5, 201)
+    f = 13.3 * np.tanh(40 * v) + 2.2 * v
+    out = plotting.plot_friction_curve(
+        {"model": (v, f), "scaled": (v, 0.8 * f)}, tmp_path / "f.png"
+    )
+    assert out.read_bytes()[:4] == png_magic and out.stat().st_size > 1000
+
+
+def test_plot_requires_time(tmp_path: Path) -> None:
+    with pytest.raises(KeyError):
+        plotting.plot_rig_run({"position [m]": np.zeros(3)}, tmp_path / "x.png")
+
+
+def test_csv_tolerates_truncated_last_line_and_nan(tmp_path: Path) -> None:
+    with RunRecorder(tmp_path, COLUMNS) as recorder:
+        recorder.append(np.array([[0.0, np.nan, np.inf], [1e-3, 0.5, 2.0]]))
+    with (tmp_path / "recording.csv").open("a") as handle:
+        handle.write("0.002,0.12")  # as if killed mid-write
+    data = read_recording(tmp_path / "recording.csv")
+    assert data["time [s]"].tolist() == [0.0, 1e-3]
+    assert np.isnan(data["position [m]"][0]) and np.isinf(data["cap pressure [Pa]"][0])
