@@ -1,0 +1,65 @@
+"""Parameter sets: TOML files with units, validated into frozen SI pydantic models.
+
+See docs/parameters.md for the file layout. Typical use::
+
+    from pneumaquad.params import load_rig
+    setup = load_rig("thesis-rig", overrides=["supply.supply_pressure=30 psig"])
+    setup.actuator.supply.supply_pressure  # Pa, absolute
+"""
+
+from .errors import MISSING, ParameterError, Problem
+from .loader import (
+    DATA_DIR,
+    apply_overrides,
+    list_parameter_sets,
+    load_actuator,
+    load_rig,
+    resolved_parameters_toml,
+)
+from .schema import (
+    ActuatorParameters,
+    ControllerParameters,
+    CylinderParameters,
+    FrictionParameters,
+    GasParameters,
+    Meta,
+    RigParameters,
+    RigSetup,
+    SimpleValveParameters,
+    SimulationParameters,
+    SupplyParameters,
+    ThermodynamicsParameters,
+    ValveParameters,
+    ValvePortParameters,
+    orientation_to_angle,
+)
+from .units import parse_quantity, ureg
+
+__all__ = [
+    "DATA_DIR",
+    "MISSING",
+    "ActuatorParameters",
+    "ControllerParameters",
+    "CylinderParameters",
+    "FrictionParameters",
+    "GasParameters",
+    "Meta",
+    "ParameterError",
+    "Problem",
+    "RigParameters",
+    "RigSetup",
+    "SimpleValveParameters",
+    "SimulationParameters",
+    "SupplyParameters",
+    "ThermodynamicsParameters",
+    "ValveParameters",
+    "ValvePortParameters",
+    "apply_overrides",
+    "list_parameter_sets",
+    "load_actuator",
+    "load_rig",
+    "orientation_to_angle",
+    "parse_quantity",
+    "resolved_parameters_toml",
+    "ureg",
+]

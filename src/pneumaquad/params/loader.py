@@ -1,0 +1,338 @@
+"""Reading, overriding, validating and writing parameter files (docs/parameters.md)."""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import difflib
+import os
+import re
+import tomllib
+import typing
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+from pydantic import BaseModel, ValidationError
+
+from .errors import MISSING, ParameterError, Problem
+from .schema import ActuatorParameters, CrossFieldError, QuantityField, RigSetup
+from .units import GaugeError, QuantityError, convert_quantity
+
+__all__ = [
+    "DATA_DIR",
+    "apply_overrides",
+    "list_parameter_sets",
+    "load_actuator",
+    "load_rig",
+    "resolved_parameters_toml",
+]
+
+DATA_DIR = Path(__file__).parent / "data"
+"""Folder of the shipped parameter sets."""
+
+_RIG_TABLES = ("rig", "controller", "simulation")
+
+
+def list_parameter_sets() -> dict[str, str]:
+    """Shipped parameter sets.
+
+    Returns
+    -------
+    dict of str to str
+        Set name (file stem, e.g. ``"thesis-rig"``) to its ``meta.description``.
+    """
+    sets = {}
+    for path in sorted(DATA_DIR.glob("*.toml")):
+        with path.open("rb") as f:
+            sets[path.stem] = str(tomllib.load(f).get("meta", {}).get("description", ""))
+    return sets
+
+
+def _resolve(name_or_path: str | os.PathLike[str]) -> Path:
+    if isinstance(name_or_path, str):
+        is_name = not name_or_path.endswith(".toml") and not any(
+            sep and sep in name_or_path for sep in ("/", os.sep, os.altsep)
+        )
+        if is_name:
+            path = DATA_DIR / f"{name_or_path}.toml"
+            if not path.is_file():
+                names = ", ".join(list_parameter_sets())
+                raise ParameterError(
+                    [
+                        Problem(
+                            "<set>",
+                            name_or_path,
+                            f"is not a shipped parameter set (one of: {names}) nor a .toml path",
+                        )
+                    ]
+                )
+            return path
+    return Path(name_or_path)
+
+
+def _read(path: Path) -> dict[str, Any]:
+    try:
+        with path.open("rb") as f:
+            return tomllib.load(f)
+    except FileNotFoundError:
+        raise ParameterError([Problem("<file>", str(path), "does not exist")]) from None
+    except OSError as exc:
+        raise ParameterError(
+            [Problem("<file>", str(path), f"could not be read ({exc.strerror})")]
+        ) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(
+            [Problem("<file>", str(path), f"is not valid TOML: {exc}")], source=str(path)
+        ) from None
+
+
+def _parse_override_value(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_overrides(raw: dict[str, Any], overrides: Iterable[str] = ()) -> dict[str, Any]:
+    """Apply ``section.key=value`` overrides to a raw (unvalidated) parameter dict.
+
+    Parameters
+    ----------
+    raw : dict
+        Parsed TOML content; not modified.
+    overrides : iterable of str
+        Items ``"dotted.key=value"``. The value is read as a TOML value if it parses
+        (``3``, ``true``, ``"30 psig"``, ``[1, 2]``), otherwise as a plain string, so
+        ``supply.supply_pressure=30 psig`` works without quotes. Unknown keys are
+        accepted here and rejected by validation.
+
+    Returns
+    -------
+    dict
+        A deep copy of `raw` with the overrides applied (missing tables are created).
+
+    Raises
+    ------
+    ParameterError
+        Listing every malformed override (no ``=``, an empty key part, or a key that
+        descends into a non-table value).
+    """
+    out = copy.deepcopy(raw)
+    problems = []
+    for item in overrides:
+        key, sep, text = str(item).partition("=")
+        parts = [p.strip() for p in key.split(".")]
+        if not sep or not all(parts):
+            problems.append(Problem("<override>", item, 'should look like "section.key=value"'))
+            continue
+        node = out
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                problems.append(Problem(key.strip(), item, f"cannot set inside non-table {part!r}"))
+                break
+        else:
+            node[parts[-1]] = _parse_override_value(text.strip())
+    if problems:
+        raise ParameterError(problems, source="overrides")
+    return out
+
+
+def _dotted(loc: Sequence[Any]) -> str:
+    return "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".")
+
+
+def _lookup(raw: Any, loc: Sequence[Any], default: Any) -> Any:
+    node = raw
+    for part in loc:
+        in_dict = isinstance(node, dict) and part in node
+        in_list = isinstance(node, list) and isinstance(part, int) and part < len(node)
+        if in_dict or in_list:
+            node = node[part]
+        else:
+            return default
+    return node
+
+
+def _model_at(model: type[BaseModel], loc: Sequence[Any]) -> type[BaseModel] | None:
+    for part in loc:
+        field = model.model_fields.get(part) if isinstance(part, str) else None
+        ann = field.annotation if field else None
+        if not (isinstance(ann, type) and issubclass(ann, BaseModel)):
+            return None
+        model = ann
+    return model
+
+
+def _problems(exc: ValidationError, raw: dict[str, Any], root: type[BaseModel]) -> list[Problem]:
+    problems: list[Problem] = []
+    errors = exc.errors()
+    bad_atmosphere = [("gas",), ("gas", "atmospheric_pressure")]
+    atmosphere_bad = any(
+        e["loc"][-2:] in bad_atmosphere or e["loc"] == ("actuator", "gas") for e in errors
+    )
+    for err in errors:
+        loc = list(err["loc"])
+        file_loc = loc[1:] if root is RigSetup and loc[:1] == ["actuator"] else loc
+        error = err.get("ctx", {}).get("error")
+        if isinstance(error, GaugeError) and atmosphere_bad and file_loc[:1] != ["gas"]:
+            continue  # follows from the atmospheric pressure problem reported already
+        if err["type"] == "missing" and isinstance(loc[-1], int):
+            key = _dotted(file_loc[:-1])
+            if not any(p.key == key for p in problems):
+                value = _lookup(raw, file_loc[:-1], MISSING)
+                problems.append(Problem(key, value, "should be a list of 5 numbers"))
+            continue
+        if isinstance(error, CrossFieldError):
+            for sub, value, message in error.items:
+                key_loc = file_loc + sub.split(".")
+                problems.append(Problem(_dotted(key_loc), _lookup(raw, key_loc, value), message))
+            continue
+        if err["type"] == "missing":
+            problems.append(Problem(_dotted(file_loc), MISSING, "this key is required"))
+            continue
+        value = _lookup(raw, file_loc, err.get("input"))
+        if err["type"] == "extra_forbidden":
+            model = _model_at(root, loc[:-1])
+            known = list(model.model_fields) if model else []
+            close = difflib.get_close_matches(str(loc[-1]), known, n=1, cutoff=0.75)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            problems.append(Problem(_dotted(file_loc), value, f"is not a known key{hint}"))
+            continue
+        message = err["msg"].removeprefix("Value error, ").replace("Input should", "should")
+        message = re.sub(r"a valid dictionary or instance of \w+", "a table", message)
+        problems.append(Problem(_dotted(file_loc), value, message))
+    return problems
+
+
+def _validate(root: type[BaseModel], data: dict[str, Any], raw: dict[str, Any], source: str) -> Any:
+    atmospheric = None
+    gas = raw.get("gas")
+    if isinstance(gas, dict):
+        with contextlib.suppress(QuantityError):  # reported by validation itself
+            atmospheric = convert_quantity(gas.get("atmospheric_pressure"), "pressure")
+    context = {"from_file": True, "atmospheric_pressure": atmospheric}
+    try:
+        return root.model_validate(data, context=context)
+    except ValidationError as exc:
+        raise ParameterError(_problems(exc, raw, root), source=source) from None
+
+
+def _load_raw(
+    name_or_path: str | os.PathLike[str], overrides: Iterable[str]
+) -> tuple[dict[str, Any], str]:
+    path = _resolve(name_or_path)
+    raw = apply_overrides(_read(path), overrides)
+    return raw, str(path)
+
+
+def load_actuator(
+    name_or_path: str | os.PathLike[str], overrides: Iterable[str] = ()
+) -> ActuatorParameters:
+    """Load and validate the actuator tables of a parameter file.
+
+    Parameters
+    ----------
+    name_or_path : str or path-like
+        A shipped set name (``"crr-beta"``: no ``.toml`` suffix, no path separator) or
+        a path to a TOML file. The ``rig``/``controller``/``simulation`` tables of a
+        rig file are ignored.
+    overrides : iterable of str
+        ``"section.key=value"`` items, see `apply_overrides`.
+
+    Returns
+    -------
+    ActuatorParameters
+        Validated parameters, all SI.
+
+    Raises
+    ------
+    ParameterError
+        Listing every problem found (missing file, TOML syntax, unknown or missing
+        keys, wrong units, out-of-range values, failed cross-field checks).
+    """
+    raw, source = _load_raw(name_or_path, overrides)
+    data = {k: v for k, v in raw.items() if k not in _RIG_TABLES}
+    return _validate(ActuatorParameters, data, raw, source)
+
+
+def load_rig(name_or_path: str | os.PathLike[str], overrides: Iterable[str] = ()) -> RigSetup:
+    """Load and validate a complete rig parameter file (actuator + rig tables).
+
+    Parameters
+    ----------
+    name_or_path : str or path-like
+        A shipped set name (``"thesis-rig"``) or a path to a TOML file.
+    overrides : iterable of str
+        ``"section.key=value"`` items, see `apply_overrides`.
+
+    Returns
+    -------
+    RigSetup
+        Validated parameters, all SI.
+
+    Raises
+    ------
+    ParameterError
+        Listing every problem found.
+    """
+    raw, source = _load_raw(name_or_path, overrides)
+    data: dict[str, Any] = {"actuator": {k: v for k, v in raw.items() if k not in _RIG_TABLES}}
+    data.update({k: raw[k] for k in _RIG_TABLES if k in raw})
+    return _validate(RigSetup, data, raw, source)
+
+
+def _quantity(annotation: Any, metadata: Iterable[Any] = ()) -> QuantityField | None:
+    for item in metadata:
+        if isinstance(item, QuantityField):
+            return item
+    if typing.get_origin(annotation) is typing.Annotated:
+        found = _quantity(None, annotation.__metadata__)
+        return found or _quantity(typing.get_args(annotation)[0])
+    for arg in typing.get_args(annotation):
+        found = _quantity(arg)
+        if found:
+            return found
+    return None
+
+
+def _to_toml_dict(model: BaseModel) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for name, field in type(model).model_fields.items():
+        value = getattr(model, name)
+        if value is None:
+            continue
+        if isinstance(value, BaseModel):
+            out[name] = _to_toml_dict(value)
+        elif isinstance(value, tuple):
+            out[name] = list(value)
+        elif (q := _quantity(field.annotation, field.metadata)) is not None:
+            out[name] = f"{value!r} {q.kind.si_unit}"
+        else:
+            out[name] = value
+    return out
+
+
+def resolved_parameters_toml(params: RigSetup | ActuatorParameters) -> str:
+    """Write validated parameters back as TOML with explicit SI units.
+
+    Parameters
+    ----------
+    params : RigSetup or ActuatorParameters
+        Validated parameters.
+
+    Returns
+    -------
+    str
+        TOML text in the file layout (actuator tables at top level), every dimensional
+        value as an SI string such as ``supply_pressure = "448159.22405594354 Pa"``
+        (pressures absolute). Loading it with `load_rig` / `load_actuator` gives an
+        equal object.
+    """
+    data = _to_toml_dict(params)
+    if isinstance(params, RigSetup):
+        data = {**data.pop("actuator"), **data}
+    header = "# Resolved parameters, SI units (pressures absolute); generated by pneumaquad\n"
+    return header + tomli_w.dumps(data)

@@ -1,0 +1,70 @@
+"""A rig experiment end to end: run folder, recording, summary and plot."""
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pneumaquad.params import resolved_parameters_toml
+from pneumaquad.params.schema import RigSetup
+from pneumaquad.plotting import plot_rig_run
+from pneumaquad.recording import RunRecorder, write_summary
+from pneumaquad.rig.metrics import general_metrics, step_metrics, tracking_metrics
+from pneumaquad.rig.simulate import RIG_COLUMNS, RigResult, simulate_rig
+
+
+def run_rig_experiment(
+    setup: RigSetup,
+    folder: Path,
+    signal: np.ndarray,
+    closed_loop: bool,
+    description: str,
+    step_time: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    extra: dict[str, Any] | None = None,
+) -> tuple[RigResult, dict[str, Any]]:
+    """Run one rig experiment and write its run folder.
+
+    The folder receives ``parameters.toml`` (resolved, SI, loadable again),
+    ``recording.csv`` (flushed as the run goes) and ``recording.parquet``,
+    ``summary.json`` and ``rig.png`` (position, pressures and command, like thesis
+    figures 25–28). An interrupted run (Ctrl-C) still writes all of them for the part
+    that ran, with ``"interrupted": true`` in the summary.
+
+    Returns
+    -------
+    (RigResult, summary dict)
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "parameters.toml").write_text(resolved_parameters_toml(setup), encoding="utf-8")
+    with RunRecorder(folder, RIG_COLUMNS) as recorder:
+        result = simulate_rig(setup, signal, closed_loop, recorder=recorder, progress=progress)
+    recording = result.recording
+    simulated = float(recording["time [s]"][-1]) if recording["time [s]"].size else 0.0
+    summary: dict[str, Any] = {
+        "description": description,
+        "parameter set": setup.actuator.meta.name,
+        "integrator": result.integrator,
+        "control step [s]": setup.simulation.control_step,
+        "substeps": setup.simulation.substeps,
+        "friction model": setup.actuator.friction.model,
+        "valve model": setup.actuator.valve.model,
+        "closed loop": closed_loop,
+        "interrupted": result.interrupted,
+        "steps": int(recording["time [s]"].size),
+        "wall time [s]": result.wall_time,
+        "real-time factor": simulated / result.wall_time if result.wall_time > 0 else math.nan,
+    }
+    if extra:
+        summary.update(extra)
+    if recording["time [s]"].size:
+        summary.update(general_metrics(recording))
+        if closed_loop:
+            summary.update(tracking_metrics(recording, setup.actuator.cylinder.stroke))
+        elif step_time is not None:
+            summary.update(step_metrics(recording, step_time))
+        plot_rig_run(recording, folder / "rig.png", title=description)
+    write_summary(folder, summary)
+    return result, summary
