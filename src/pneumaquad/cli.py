@@ -1,2 +1,351 @@
+"""Command-line interface: ``pneumaquad``.
+
+A thin layer over the library. Values given on the command line carry units
+(``--amplitude "0.4 in"``); bad values and bad parameter files end with a one-paragraph
+message naming the key, the value and what was expected, and exit status 2.
+"""
+
+import sys
+from collections.abc import Callable
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.table import Table
+
+from pneumaquad.params import (
+    ParameterError,
+    list_parameter_sets,
+    load_rig,
+    parse_quantity,
+    resolved_parameters_toml,
+)
+from pneumaquad.params.loader import load_actuator
+from pneumaquad.recording import create_run_folder
+from pneumaquad.rig import signals
+from pneumaquad.rig.experiment import run_rig_experiment
+from pneumaquad.rig.signals import RecordedReferenceError
+from pneumaquad.rig.simulate import ReferenceSolverError
+
+USER_ERRORS = (ParameterError, RecordedReferenceError, ReferenceSolverError)
+
+app = typer.Typer(
+    help="pneumaquad: simulator for pneumatically actuated legged robots.",
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    add_completion=False,
+)
+params_app = typer.Typer(help="List, show and check parameter sets.", no_args_is_help=True)
+rig_app = typer.Typer(
+    help="Single-DoF test rig (thesis ch. 4): one cylinder moving a load.", no_args_is_help=True
+)
+app.add_typer(params_app, name="params")
+app.add_typer(rig_app, name="rig")
+console = Console(stderr=True)
+
+ParamsOption = Annotated[
+    str, typer.Option("--params", "-p", help="Shipped set name or path to a TOML file.")
+]
+SetOption = Annotated[
+    list[str] | None,
+    typer.Option("--set", "-s", help="Override a value: section.key=value (TOML value)."),
+]
+OutputOption = Annotated[
+    Path | None, typer.Option("--output", "-o", help="Run folder (default runs/<kind>-<time>).")
+]
+
+
+@contextmanager
+def progress_bar(label: str):
+    """A rich progress bar; yields a callback (done, total)."""
+    columns = (
+        TextColumn(label),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=console, transient=True) as progress:
+        task = progress.add_task(label, total=None)
+
+        def update(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
+
+        yield update
+
+
+def quantity(text: str, kind: str, option: str) -> float:
+    """Parse a command-line quantity such as "0.4 in" to SI (raises ParameterError)."""
+    return parse_quantity(text, kind, option)
+
+
+def finish_run(folder: Path, summary: dict) -> None:
+    """Print where a run went and end with 130 if it was interrupted."""
+    console.print(f"run folder: [bold]{folder}[/bold]")
+    shown = (
+        "simulated time [s]",
+        "wall time [s]",
+        "real-time factor",
+        "rmse [m]",
+        "motion onset delay [s]",
+        "stiction peak force [N]",
+        "air consumed [NL]",
+    )
+    for key in shown:
+        if key in summary:
+            console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
+    if summary.get("interrupted"):
+        console.print("[yellow]interrupted: the recording holds the part that ran[/yellow]")
+        raise typer.Exit(130)
+
+
+@params_app.command("list")
+def params_list() -> None:
+    """List the shipped parameter sets."""
+    table = Table("name", "description")
+    for name, description in list_parameter_sets().items():
+        table.add_row(name, description)
+    Console().print(table)
+
+
+@params_app.command("show")
+def params_show(
+    name: Annotated[str, typer.Argument(help="Set name or TOML path.")], overrides: SetOption = None
+) -> None:
+    """Print a parameter set resolved to SI (loadable again with --params)."""
+    try:
+        setup = load_rig(name, overrides or [])
+    except ParameterError as rig_error:
+        if not any(
+            problem.key.split(".")[0] in ("rig", "controller", "simulation")
+            for problem in rig_error.problems
+        ):
+            raise
+        setup = load_actuator(name, overrides or [])
+    sys.stdout.write(resolved_parameters_toml(setup))
+
+
+@params_app.command("check")
+def params_check(
+    name: Annotated[str, typer.Argument(help="Set name or TOML path.")], overrides: SetOption = None
+) -> None:
+    """Validate a parameter file; exit 2 with the problems if it is not valid."""
+    load_rig(name, overrides or [])
+    console.print(f"{name}: valid")
+
+
+@rig_app.command("step")
+def rig_step(
+    voltage: Annotated[str, typer.Argument(help='Step command, e.g. "6.0 V".')],
+    params: ParamsOption = "thesis-rig",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    step_time: Annotated[str, typer.Option(help="Time of the step.")] = "5 s",
+    duration: Annotated[str, typer.Option(help="Total duration.")] = "10 s",
+) -> None:
+    """Open-loop voltage step with the thesis protocol (opposite saturation, then the step)."""
+    setup = load_rig(params, overrides or [])
+    command = quantity(voltage, "voltage", "VOLTAGE")
+    valve = setup.actuator.valve
+    if not valve.min_voltage <= command <= valve.max_voltage:
+        raise ParameterError.single(
+            "VOLTAGE", voltage, f"within [{valve.min_voltage:g}, {valve.max_voltage:g}] V"
+        )
+    at = quantity(step_time, "time", "--step-time")
+    total = quantity(duration, "time", "--duration")
+    signal = signals.thesis_step_command(
+        command,
+        valve.offset_voltage,
+        valve.min_voltage,
+        valve.max_voltage,
+        setup.simulation.control_step,
+        at,
+        total,
+    )
+    folder = create_run_folder(output, "rig-step")
+    with progress_bar("rig step") as update:
+        _, summary = run_rig_experiment(
+            setup, folder, signal, False, f"open-loop step to {command:g} V", at, update
+        )
+    finish_run(folder, summary)
+
+
+@rig_app.command("spacer")
+def rig_spacer(
+    voltage: Annotated[str, typer.Argument(help='Held command, e.g. "5.5 V".')],
+    params: ParamsOption = "thesis-rig",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    duration: Annotated[str, typer.Option(help="Duration.")] = "5 s",
+) -> None:
+    """Fixed piston (spacer, thesis 4.2.1) at a held voltage: pressures settle on Fig. 23."""
+    setup = load_rig(params, [*(overrides or []), "rig.spacer=true"])
+    command = quantity(voltage, "voltage", "VOLTAGE")
+    total = quantity(duration, "time", "--duration")
+    count = round(total / setup.simulation.control_step)
+    folder = create_run_folder(output, "rig-spacer")
+    with progress_bar("rig spacer") as update:
+        _, summary = run_rig_experiment(
+            setup,
+            folder,
+            signals.constant(command, count),
+            False,
+            f"fixed piston at {command:g} V",
+            None,
+            update,
+        )
+    finish_run(folder, summary)
+
+
+@rig_app.command("track")
+def rig_track(
+    reference: Annotated[
+        str, typer.Argument(help="Reference shape: sine, step, trapezoid, chirp or file.")
+    ],
+    params: ParamsOption = "thesis-rig",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    mean: Annotated[str, typer.Option(help="Mean position (sine, chirp).")] = "0.875 in",
+    amplitude: Annotated[str, typer.Option(help="Amplitude (sine, chirp).")] = "0.4 in",
+    frequency: Annotated[str, typer.Option(help="Frequency (sine; chirp start).")] = "0.5 Hz",
+    end_frequency: Annotated[str, typer.Option(help="Chirp end frequency.")] = "3 Hz",
+    duration: Annotated[str, typer.Option(help="Duration (sine, chirp).")] = "10 s",
+    levels: Annotated[
+        str, typer.Option(help="Step levels, comma separated (step); low,high (trapezoid).")
+    ] = "0.4 in,1.4 in,0.6 in,1.2 in,0.875 in",
+    dwell: Annotated[str, typer.Option(help="Time per level (step); hold (trapezoid).")] = "2 s",
+    ramp: Annotated[str, typer.Option(help="Ramp time (trapezoid).")] = "1 s",
+    cycles: Annotated[int, typer.Option(help="Cycles (trapezoid).")] = 2,
+    file: Annotated[Path | None, typer.Option(help="CSV or .mat reference (file).")] = None,
+    time_column: Annotated[str, typer.Option(help="Time column in --file [s].")] = "time",
+    position_column: Annotated[str, typer.Option(help="Position column in --file.")] = "position",
+    position_unit: Annotated[str, typer.Option(help="Unit of the position column.")] = "m",
+) -> None:
+    """Closed-loop position tracking with the PID of the parameter file."""
+    setup = load_rig(params, overrides or [])
+    dt = setup.simulation.control_step
+    signal = build_reference(
+        reference,
+        dt,
+        mean,
+        amplitude,
+        frequency,
+        end_frequency,
+        duration,
+        levels,
+        dwell,
+        ramp,
+        cycles,
+        file,
+        time_column,
+        position_column,
+        position_unit,
+    )
+    folder = create_run_folder(output, f"rig-{reference}")
+    with progress_bar(f"rig track {reference}") as update:
+        _, summary = run_rig_experiment(
+            setup, folder, signal, True, f"closed-loop {reference} tracking", None, update
+        )
+    finish_run(folder, summary)
+
+
+def build_reference(
+    reference,
+    dt,
+    mean,
+    amplitude,
+    frequency,
+    end_frequency,
+    duration,
+    levels,
+    dwell,
+    ramp,
+    cycles,
+    file,
+    time_column,
+    position_column,
+    position_unit,
+):
+    """Position reference [m] per control step for ``rig track``."""
+    builders: dict[str, Callable[[], object]] = {
+        "sine": lambda: signals.sine(
+            quantity(mean, "length", "--mean"),
+            quantity(amplitude, "length", "--amplitude"),
+            quantity(frequency, "[1]/[time]", "--frequency"),
+            quantity(duration, "time", "--duration"),
+            dt,
+        ),
+        "chirp": lambda: signals.chirp(
+            quantity(mean, "length", "--mean"),
+            quantity(amplitude, "length", "--amplitude"),
+            quantity(frequency, "[1]/[time]", "--frequency"),
+            quantity(end_frequency, "[1]/[time]", "--end-frequency"),
+            quantity(duration, "time", "--duration"),
+            dt,
+        ),
+        "step": lambda: signals.step_train(
+            [quantity(level, "length", "--levels") for level in levels.split(",")],
+            quantity(dwell, "time", "--dwell"),
+            dt,
+        ),
+        "trapezoid": lambda: signals.trapezoid(
+            *[quantity(level, "length", "--levels") for level in levels.split(",")[:2]],
+            quantity(ramp, "time", "--ramp"),
+            quantity(dwell, "time", "--dwell"),
+            cycles,
+            dt,
+        ),
+        "file": lambda: signals.recorded_reference(
+            file if file is not None else Path(""),
+            time_column,
+            position_column,
+            quantity(f"1 {position_unit}", "length", "--position-unit"),
+            dt,
+        ),
+    }
+    if reference not in builders:
+        raise ParameterError.single(
+            "REFERENCE", reference, "one of sine, step, trapezoid, chirp, file"
+        )
+    if reference == "trapezoid" and len(levels.split(",")) < 2:
+        raise ParameterError.single("--levels", levels, "two lengths: low,high")
+    return builders[reference]()
+
+
+@app.command("valve-fit")
+def valve_fit() -> None:
+    """Run the thesis's App. B.2 equivalent-area fit and print both ports' polynomials."""
+    from pneumaquad.valve_fit import thesis_port_polynomials
+
+    table = Table("port", "side", "coefficients [m^2/V^n], highest power first")
+    for port in (1, 2):
+        negative, positive = thesis_port_polynomials(port)
+        table.add_row(str(port), "u_c <= 0", ", ".join(f"{c:.4g}" for c in negative))
+        table.add_row(str(port), "u_c > 0", ", ".join(f"{c:.4g}" for c in positive))
+    Console().print(table)
+
+
+@app.command("demo")
+def demo(
+    output: Annotated[Path, typer.Option("--output", "-o", help="Report folder.")] = Path(
+        "runs/demo"
+    ),
+) -> None:
+    """Representative rig runs and a report folder (report.md, report.html, PNGs, JSON)."""
+    from pneumaquad.demo import run_demo
+
+    with progress_bar("demo") as update:
+        report = run_demo(output, update)
+    console.print(f"report: [bold]{report}[/bold]")
+
+
 def main() -> None:
-    raise SystemExit(0)
+    """Entry point: run the app; user errors print a message and exit with status 2."""
+    try:
+        app()
+    except USER_ERRORS as error:
+        console.print("error:", style="bold red", end=" ")
+        console.print(str(error), highlight=False, markup=False, soft_wrap=True)
+        sys.exit(2)

@@ -196,12 +196,25 @@ def port_flow(p, conductance: float, source_pressure: float, pressure: float, te
     """Mass flow into a chamber from its valve port [kg/s] (air enters at supply temperature)."""
     if p[P_FLOW_FORM] == FLOW_ISO6358:
         return iso6358_mass_flow(
-            conductance, source_pressure, pressure, p[P_TS], temperature, p[P_ISO_B],
+            conductance,
+            source_pressure,
+            pressure,
+            p[P_TS],
+            temperature,
+            p[P_ISO_B],
             p[P_LAMINAR],
         )
     return orifice_mass_flow(
-        conductance, source_pressure, pressure, p[P_TS], temperature, p[P_K], p[P_C1],
-        p[P_C2], p[P_CRITICAL], p[P_LAMINAR],
+        conductance,
+        source_pressure,
+        pressure,
+        p[P_TS],
+        temperature,
+        p[P_K],
+        p[P_C1],
+        p[P_C2],
+        p[P_CRITICAL],
+        p[P_LAMINAR],
     )
 
 
@@ -211,16 +224,36 @@ def chamber_rate(p, pressure, mass, volume, volume_rate, flow_in, wall_area):
     temperature = chamber_temperature(pressure, volume, mass, p[P_R])
     flow_temperature = p[P_TS] if flow_in > 0.0 else temperature
     return chamber_pressure_rate(
-        pressure, volume, volume_rate, flow_in, flow_temperature, temperature, wall_area,
-        p[P_K], p[P_R], p[P_CP], int(p[P_THERMO_MODEL]), p[P_POLYTROPIC_N],
-        p[P_HEAT_TRANSFER], p[P_WALL_TEMPERATURE],
+        pressure,
+        volume,
+        volume_rate,
+        flow_in,
+        flow_temperature,
+        temperature,
+        wall_area,
+        p[P_K],
+        p[P_R],
+        p[P_CP],
+        int(p[P_THERMO_MODEL]),
+        p[P_POLYTROPIC_N],
+        p[P_HEAT_TRANSFER],
+        p[P_WALL_TEMPERATURE],
     )
 
 
 @njit(cache=True)
 def pneumatic_rates(
-    p, cap_pressure, rod_pressure, cap_mass, rod_mass, position, velocity,
-    cap_source, cap_conductance, rod_source, rod_conductance,
+    p,
+    cap_pressure,
+    rod_pressure,
+    cap_mass,
+    rod_mass,
+    position,
+    velocity,
+    cap_source,
+    cap_conductance,
+    rod_source,
+    rod_conductance,
 ):
     """Rates of the four chamber states and the supply draw for one actuator.
 
@@ -275,7 +308,16 @@ def heun_pneumatics(p, s, position, velocity, time_step, supply_pressure, out):
     mc = s[S_CAP_MASS]
     mr = s[S_ROD_MASS]
     dpc1, dpr1, fc1, fr1, draw1 = pneumatic_rates(
-        p, pc, pr, mc, mr, position, velocity, cap_source, cap_conductance, rod_source,
+        p,
+        pc,
+        pr,
+        mc,
+        mr,
+        position,
+        velocity,
+        cap_source,
+        cap_conductance,
+        rod_source,
         rod_conductance,
     )
     h = time_step
@@ -284,8 +326,17 @@ def heun_pneumatics(p, s, position, velocity, time_step, supply_pressure, out):
     mc_pred = max(mc + h * fc1, 1e-12)
     mr_pred = max(mr + h * fr1, 1e-12)
     dpc2, dpr2, fc2, fr2, draw2 = pneumatic_rates(
-        p, pc_pred, pr_pred, mc_pred, mr_pred, position + h * velocity, velocity, cap_source,
-        cap_conductance, rod_source, rod_conductance,
+        p,
+        pc_pred,
+        pr_pred,
+        mc_pred,
+        mr_pred,
+        position + h * velocity,
+        velocity,
+        cap_source,
+        cap_conductance,
+        rod_source,
+        rod_conductance,
     )
     s[S_CAP_PRESSURE] = max(pc + 0.5 * h * (dpc1 + dpc2), 1.0)
     s[S_ROD_PRESSURE] = max(pr + 0.5 * h * (dpr1 + dpr2), 1.0)
@@ -303,8 +354,18 @@ def heun_pneumatics(p, s, position, velocity, time_step, supply_pressure, out):
 def friction_of(p, velocity, bristle):
     """Friction force of actuator row p at a velocity and bristle deflection [N]."""
     return friction_force(
-        int(p[P_FRICTION_MODEL]), velocity, bristle, p[P_FS], p[P_FC], p[P_CV], p[P_VS],
-        p[P_EXPONENT], p[P_KTANH], p[P_DAMPING], p[P_SIGMA0], p[P_SIGMA1],
+        int(p[P_FRICTION_MODEL]),
+        velocity,
+        bristle,
+        p[P_FS],
+        p[P_FC],
+        p[P_CV],
+        p[P_VS],
+        p[P_EXPONENT],
+        p[P_KTANH],
+        p[P_DAMPING],
+        p[P_SIGMA0],
+        p[P_SIGMA1],
     )
 
 
@@ -324,17 +385,24 @@ def finish_outputs(p, s, position, control_step, out):
     out[O_ROD_FLOW] /= control_step
     out[O_SUPPLY_DRAW] /= control_step
     out[O_PNEUMATIC_FORCE] = piston_force(
-        s[S_CAP_PRESSURE], s[S_ROD_PRESSURE], p[P_PATM], p[P_CAP_AREA], p[P_ROD_AREA],
+        s[S_CAP_PRESSURE],
+        s[S_ROD_PRESSURE],
+        p[P_PATM],
+        p[P_CAP_AREA],
+        p[P_ROD_AREA],
         p[P_ROD_SECTION],
     )
     out[O_CAP_TEMPERATURE] = chamber_temperature(
-        s[S_CAP_PRESSURE], chamber_volume_cap(position, p[P_CAP_AREA], p[P_CAP_DEAD]),
-        s[S_CAP_MASS], p[P_R],
+        s[S_CAP_PRESSURE],
+        chamber_volume_cap(position, p[P_CAP_AREA], p[P_CAP_DEAD]),
+        s[S_CAP_MASS],
+        p[P_R],
     )
     out[O_ROD_TEMPERATURE] = chamber_temperature(
         s[S_ROD_PRESSURE],
         chamber_volume_rod(position, p[P_STROKE], p[P_ROD_AREA], p[P_ROD_DEAD]),
-        s[S_ROD_MASS], p[P_R],
+        s[S_ROD_MASS],
+        p[P_R],
     )
 
 
@@ -343,9 +411,8 @@ def draw_from_tank(supply, drawn_mass):
     """Isothermal tank: remove the drawn mass, dP = -R·T·dm/V."""
     supply[SUPPLY_DRAWN_MASS] += drawn_mass
     if supply[SUPPLY_MODEL] == 1.0:
-        supply[SUPPLY_TANK_PRESSURE] -= (
-            supply[SUPPLY_GAS_CONSTANT] * supply[SUPPLY_TANK_TEMPERATURE] * drawn_mass / supply[SUPPLY_TANK_VOLUME]
-        )
+        gas = supply[SUPPLY_GAS_CONSTANT] * supply[SUPPLY_TANK_TEMPERATURE]
+        supply[SUPPLY_TANK_PRESSURE] -= gas * drawn_mass / supply[SUPPLY_TANK_VOLUME]
         supply[SUPPLY_TANK_PRESSURE] = max(supply[SUPPLY_TANK_PRESSURE], 0.0)
 
 
@@ -416,10 +483,17 @@ def rig_mechanics_substep(p, s, time_step, out):
     x = s[S_POSITION]
     v = s[S_VELOCITY]
     mass = p[P_MOVING_MASS]
-    force = piston_force(
-        s[S_CAP_PRESSURE], s[S_ROD_PRESSURE], p[P_PATM], p[P_CAP_AREA], p[P_ROD_AREA],
-        p[P_ROD_SECTION],
-    ) + p[P_GRAVITY_FORCE]
+    force = (
+        piston_force(
+            s[S_CAP_PRESSURE],
+            s[S_ROD_PRESSURE],
+            p[P_PATM],
+            p[P_CAP_AREA],
+            p[P_ROD_AREA],
+            p[P_ROD_SECTION],
+        )
+        + p[P_GRAVITY_FORCE]
+    )
     stop = end_stop_force(x, v, p[P_STROKE], p[P_STOP_STIFFNESS], p[P_STOP_DAMPING])
     stiffness = 0.0
     stop_damping = 0.0
@@ -428,11 +502,21 @@ def rig_mechanics_substep(p, s, time_step, out):
         stop_damping = p[P_STOP_DAMPING]
     model = int(p[P_FRICTION_MODEL])
     damping = friction_damping(
-        model, v, p[P_FS], p[P_FC], p[P_CV], p[P_VS], p[P_EXPONENT], p[P_KTANH],
-        p[P_DAMPING], p[P_SIGMA0], p[P_SIGMA1], s[S_BRISTLE],
+        model,
+        v,
+        p[P_FS],
+        p[P_FC],
+        p[P_CV],
+        p[P_VS],
+        p[P_EXPONENT],
+        p[P_KTANH],
+        p[P_DAMPING],
+        p[P_SIGMA0],
+        p[P_SIGMA1],
+        s[S_BRISTLE],
     )
     effective_mass = mass + h * (damping + stop_damping) + h * h * stiffness
-    if model == FRICTION_COULOMB or model == FRICTION_COULOMB_VISCOUS:
+    if model in (FRICTION_COULOMB, FRICTION_COULOMB_VISCOUS):
         viscous = p[P_CV] if model == FRICTION_COULOMB_VISCOUS else 0.0
         free = v + h * (force + stop - viscous * v - h * stiffness * v) / effective_mass
         needed = effective_mass * free / h
@@ -516,8 +600,16 @@ def rig_rates(p, y, command, supply_pressure):
     if spacer:
         v = 0.0
     dpc, dpr, fc, fr, draw = pneumatic_rates(
-        p, y[S_CAP_PRESSURE], y[S_ROD_PRESSURE], max(y[S_CAP_MASS], 1e-12),
-        max(y[S_ROD_MASS], 1e-12), x, v, cap_source, cap_conductance, rod_source,
+        p,
+        y[S_CAP_PRESSURE],
+        y[S_ROD_PRESSURE],
+        max(y[S_CAP_MASS], 1e-12),
+        max(y[S_ROD_MASS], 1e-12),
+        x,
+        v,
+        cap_source,
+        cap_conductance,
+        rod_source,
         rod_conductance,
     )
     rates[S_CAP_PRESSURE] = dpc
@@ -531,10 +623,17 @@ def rig_rates(p, y, command, supply_pressure):
     if model == FRICTION_LUGRE:
         g = stribeck_curve(v, p[P_FS], p[P_FC], p[P_VS], p[P_EXPONENT])
         rates[S_BRISTLE] = v - p[P_SIGMA0] * abs(v) * y[S_BRISTLE] / g
-    force = piston_force(
-        y[S_CAP_PRESSURE], y[S_ROD_PRESSURE], p[P_PATM], p[P_CAP_AREA], p[P_ROD_AREA],
-        p[P_ROD_SECTION],
-    ) + p[P_GRAVITY_FORCE]
+    force = (
+        piston_force(
+            y[S_CAP_PRESSURE],
+            y[S_ROD_PRESSURE],
+            p[P_PATM],
+            p[P_CAP_AREA],
+            p[P_ROD_AREA],
+            p[P_ROD_SECTION],
+        )
+        + p[P_GRAVITY_FORCE]
+    )
     stop = end_stop_force(x, v, p[P_STROKE], p[P_STOP_STIFFNESS], p[P_STOP_DAMPING])
     friction = friction_of(p, v, y[S_BRISTLE])
     rates[S_POSITION] = v

@@ -107,7 +107,7 @@ def plot_rig_run(recording: Recording, path: Path, title: str = "") -> Path:
     if position is not None:
         ax_pos.plot(time, metres_to_inches(position), color="C0", lw=1.6, label="Position")
     reference = _column(recording, REFERENCE)
-    if reference is not None:
+    if reference is not None and bool(np.any(np.isfinite(reference))):
         ax_pos.plot(
             time, metres_to_inches(reference), color="k", ls="--", lw=1.1, label="Reference"
         )

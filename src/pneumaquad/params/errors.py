@@ -66,6 +66,11 @@ class ParameterError(ValueError):
         self.source = source
         super().__init__(str(self))
 
+    @classmethod
+    def single(cls, key: str, value: Any, expected: str) -> ParameterError:
+        """One problem: ``key`` had ``value`` where ``expected`` was wanted."""
+        return cls([Problem(key, value, f"is invalid; expected {expected}")])
+
     def __str__(self) -> str:
         n = len(self.problems)
         where = f" in {self.source}" if self.source else ""

@@ -32,9 +32,7 @@ def piston_force(
         Force [N].
     """
     return (
-        cap_pressure * cap_area
-        - rod_pressure * rod_area
-        - atmospheric_pressure * rod_cross_section
+        cap_pressure * cap_area - rod_pressure * rod_area - atmospheric_pressure * rod_cross_section
     )
 
 

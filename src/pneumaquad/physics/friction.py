@@ -205,16 +205,23 @@ def friction_force(
         return damping_coefficient * velocity
     if model == FRICTION_STRIBECK_TANH:
         return stribeck_tanh_force(
-            velocity, static_force, coulomb_force, viscous_coefficient, stribeck_velocity,
-            stribeck_exponent, tanh_coefficient,
+            velocity,
+            static_force,
+            coulomb_force,
+            viscous_coefficient,
+            stribeck_velocity,
+            stribeck_exponent,
+            tanh_coefficient,
         )
     if model == FRICTION_LUGRE:
         g = stribeck_curve(
             velocity, static_force, coulomb_force, stribeck_velocity, stribeck_exponent
         )
         rate = lugre_bristle_rate(velocity, deflection, bristle_stiffness, g)
-        return bristle_stiffness * deflection + bristle_damping * rate + (
-            viscous_coefficient * velocity
+        return (
+            bristle_stiffness * deflection
+            + bristle_damping * rate
+            + (viscous_coefficient * velocity)
         )
     sign = 0.0
     if velocity > 0.0:

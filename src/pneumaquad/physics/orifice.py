@@ -123,12 +123,24 @@ def orifice_mass_flow(
     """
     if pressure_a >= pressure_b:
         return effective_area * orifice_flux(
-            pressure_a, pressure_b, temperature_a, heat_capacity_ratio, c1, c2,
-            critical_ratio, laminar_ratio,
+            pressure_a,
+            pressure_b,
+            temperature_a,
+            heat_capacity_ratio,
+            c1,
+            c2,
+            critical_ratio,
+            laminar_ratio,
         )
     return -effective_area * orifice_flux(
-        pressure_b, pressure_a, temperature_b, heat_capacity_ratio, c1, c2,
-        critical_ratio, laminar_ratio,
+        pressure_b,
+        pressure_a,
+        temperature_b,
+        heat_capacity_ratio,
+        c1,
+        c2,
+        critical_ratio,
+        laminar_ratio,
     )
 
 

@@ -26,7 +26,7 @@ def tracking_metrics(recording: Recording, stroke: float) -> dict[str, float]:
     if times.size > 10:
         ref = reference - reference.mean()
         pos = position - position.mean()
-        max_shift = min(times.size // 4, int(round(1.0 / dt)))
+        max_shift = min(times.size // 4, round(1.0 / dt))
         shifts = np.arange(0, max_shift)
         scores = [float(np.dot(ref[: ref.size - s], pos[s:])) for s in shifts]
         lag = float(shifts[int(np.argmax(scores))] * dt)
@@ -59,8 +59,10 @@ def step_metrics(recording: Recording, step_time: float) -> dict[str, float]:
         return figures
     onset = start + moved[0]
     figures["motion onset delay [s]"] = float(times[onset] - times[start])
-    segment = force[start : onset + 1]
-    figures["stiction peak force [N]"] = float(segment[np.argmax(np.abs(segment))])
+    direction = 1.0 if position[-1] >= position[start] else -1.0
+    segment = direction * force[start : onset + 1]
+    figures["stiction peak force [N]"] = float(direction * np.max(segment))
+    figures["stiction peak time [s]"] = float(times[start + int(np.argmax(segment))])
     moving = np.abs(recording["velocity [m/s]"][onset:]) > REST_SPEED
     figures["time moving [s]"] = float(np.count_nonzero(moving) * (times[1] - times[0]))
     return figures

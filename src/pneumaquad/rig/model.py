@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from pneumaquad import layout as L
+from pneumaquad import layout
 from pneumaquad.actuator import initial_state, pack_parameters
 from pneumaquad.control.pid import pid_gains
 from pneumaquad.params.schema import RigSetup
@@ -18,11 +18,11 @@ def pack_rig_parameters(setup: RigSetup) -> np.ndarray:
     row = pack_parameters(setup.actuator)
     rig = setup.rig
     moving_mass = rig.load_mass + setup.actuator.cylinder.piston_mass
-    row[L.P_MOVING_MASS] = moving_mass
-    row[L.P_GRAVITY_FORCE] = gravity_force(moving_mass, rig.gravity, rig.orientation_angle)
-    row[L.P_STOP_STIFFNESS] = rig.end_stop_stiffness
-    row[L.P_STOP_DAMPING] = rig.end_stop_damping
-    row[L.P_SPACER] = 1.0 if rig.spacer else 0.0
+    row[layout.P_MOVING_MASS] = moving_mass
+    row[layout.P_GRAVITY_FORCE] = gravity_force(moving_mass, rig.gravity, rig.orientation_angle)
+    row[layout.P_STOP_STIFFNESS] = rig.end_stop_stiffness
+    row[layout.P_STOP_DAMPING] = rig.end_stop_damping
+    row[layout.P_SPACER] = 1.0 if rig.spacer else 0.0
     return row[np.newaxis, :]
 
 
@@ -30,9 +30,7 @@ def rig_initial_state(setup: RigSetup, params: np.ndarray) -> np.ndarray:
     """Initial kernel state (1, N_STATES): the rig's initial position and pressures, at rest."""
     rig = setup.rig
     position = setup.actuator.cylinder.stroke if rig.spacer else rig.initial_position
-    state = initial_state(
-        params[0], position, rig.initial_cap_pressure, rig.initial_rod_pressure
-    )
+    state = initial_state(params[0], position, rig.initial_cap_pressure, rig.initial_rod_pressure)
     return state[np.newaxis, :]
 
 

@@ -16,6 +16,11 @@ def time_grid(duration: float, control_step: float) -> np.ndarray:
     return np.arange(count) * control_step
 
 
+def constant(value: float, count: int) -> np.ndarray:
+    """A held value for ``count`` control steps."""
+    return np.full(count, float(value))
+
+
 def thesis_step_command(
     step_voltage: float,
     offset_voltage: float,
@@ -40,9 +45,7 @@ def thesis_step_command(
     return np.where(times < step_time, before, step_voltage).astype(float)
 
 
-def step_train(
-    levels: Sequence[float], dwell: float, control_step: float
-) -> np.ndarray:
+def step_train(levels: Sequence[float], dwell: float, control_step: float) -> np.ndarray:
     """Position reference visiting each level for ``dwell`` seconds [m]."""
     per_level = round(dwell / control_step)
     return np.repeat(np.asarray(levels, dtype=float), per_level)
@@ -125,8 +128,9 @@ def recorded_reference(
             contents = loadmat(path, squeeze_me=True)
         except (NotImplementedError, ValueError) as error:
             raise RecordedReferenceError(f"{path}: cannot read MATLAB file ({error})") from error
-        columns = {k: np.atleast_1d(v).astype(float) for k, v in contents.items()
-                   if not k.startswith("__")}
+        columns = {
+            k: np.atleast_1d(v).astype(float) for k, v in contents.items() if not k.startswith("__")
+        }
     else:
         table = np.genfromtxt(path, delimiter=",", names=True, dtype=float, encoding="utf-8")
         columns = {name: np.atleast_1d(table[name]) for name in table.dtype.names}

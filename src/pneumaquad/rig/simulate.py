@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 from scipy.integrate import solve_ivp
 
-from pneumaquad import layout as L
+from pneumaquad import layout
 from pneumaquad.actuator import supply_state
 from pneumaquad.control.pid import N_CONTROLLER_STATES, pid_update
 from pneumaquad.kernel import (
@@ -50,6 +50,7 @@ RIG_COLUMNS = (
     "supply pressure [Pa]",
     "supply mass flow [kg/s]",
     "air consumed [kg]",
+    "tank pressure [Pa]",
 )
 N_COLUMNS = len(RIG_COLUMNS)
 
@@ -62,50 +63,72 @@ class ReferenceSolverError(ValueError):
 
 
 @njit(cache=True)
-def write_row(row, sample_time, command, reference, p, s, out, supply_pressure):
+def write_row(row, sample_time, command, reference, p, s, out, supply):
     """Fill one recording row (layout of RIG_COLUMNS) from the state after a step."""
     row[0] = sample_time
     row[1] = command
     row[2] = reference
-    row[3] = s[L.S_POSITION]
-    row[4] = s[L.S_VELOCITY]
-    row[5] = s[L.S_CAP_PRESSURE]
-    row[6] = s[L.S_ROD_PRESSURE]
-    row[7] = out[L.O_CAP_TEMPERATURE]
-    row[8] = out[L.O_ROD_TEMPERATURE]
-    row[9] = out[L.O_CAP_FLOW]
-    row[10] = out[L.O_ROD_FLOW]
-    row[11] = s[L.S_CAP_MASS]
-    row[12] = s[L.S_ROD_MASS]
-    row[13] = out[L.O_FRICTION_FORCE]
-    row[14] = out[L.O_PNEUMATIC_FORCE]
-    row[15] = out[L.O_END_STOP_FORCE]
-    row[16] = supply_pressure
-    row[17] = out[L.O_SUPPLY_DRAW]
-    row[18] = s[L.S_AIR_CONSUMED]
+    row[3] = s[layout.S_POSITION]
+    row[4] = s[layout.S_VELOCITY]
+    row[5] = s[layout.S_CAP_PRESSURE]
+    row[6] = s[layout.S_ROD_PRESSURE]
+    row[7] = out[layout.O_CAP_TEMPERATURE]
+    row[8] = out[layout.O_ROD_TEMPERATURE]
+    row[9] = out[layout.O_CAP_FLOW]
+    row[10] = out[layout.O_ROD_FLOW]
+    row[11] = s[layout.S_CAP_MASS]
+    row[12] = s[layout.S_ROD_MASS]
+    row[13] = out[layout.O_FRICTION_FORCE]
+    row[14] = out[layout.O_PNEUMATIC_FORCE]
+    row[15] = out[layout.O_END_STOP_FORCE]
+    row[16] = supply_pressure_now(p, supply)
+    row[17] = out[layout.O_SUPPLY_DRAW]
+    row[18] = s[layout.S_AIR_CONSUMED]
+    row[19] = (
+        supply[layout.SUPPLY_TANK_PRESSURE] if supply[layout.SUPPLY_MODEL] == 1.0 else math.nan
+    )
 
 
 @njit(cache=True)
 def run_rig_chunk(
-    params, state, supply, gains, controller, closed_loop, signal, start, count,
-    control_step, substeps, rows,
+    params,
+    state,
+    supply,
+    gains,
+    controller,
+    closed_loop,
+    signal,
+    start,
+    count,
+    control_step,
+    substeps,
+    rows,
 ):
     """Run ``count`` control steps from index ``start``; fill rows[0:count]."""
     commands = np.zeros(1)
-    outputs = np.zeros((1, L.N_OUTPUTS))
+    outputs = np.zeros((1, layout.N_OUTPUTS))
     for j in range(count):
         k = start + j
         if closed_loop:
             reference = signal[k]
-            command = pid_update(gains, controller, reference, state[0, L.S_POSITION],
-                                 control_step)
+            command = pid_update(
+                gains, controller, reference, state[0, layout.S_POSITION], control_step
+            )
         else:
             reference = math.nan
             command = signal[k]
         commands[0] = command
         step_rigs(params, state, commands, control_step, substeps, supply, outputs)
-        write_row(rows[j], (k + 1) * control_step, command, reference, params[0], state[0],
-                  outputs[0], supply_pressure_now(params[0], supply))
+        write_row(
+            rows[j],
+            (k + 1) * control_step,
+            command,
+            reference,
+            params[0],
+            state[0],
+            outputs[0],
+            supply,
+        )
 
 
 @dataclass
@@ -182,9 +205,20 @@ def simulate_rig(
     try:
         while done < total:
             count = min(chunk_steps, total - done)
-            run_rig_chunk(params, state, supply, gains, controller, closed_loop,
-                          np.asarray(signal, dtype=float), done, count, dt, substeps,
-                          rows[done : done + count])
+            run_rig_chunk(
+                params,
+                state,
+                supply,
+                gains,
+                controller,
+                closed_loop,
+                np.asarray(signal, dtype=float),
+                done,
+                count,
+                dt,
+                substeps,
+                rows[done : done + count],
+            )
             _record(recorder, rows[done : done + count])
             done += count
             if progress is not None:
@@ -198,18 +232,22 @@ def simulate_rig(
 def _tolerance_scales(params: np.ndarray) -> np.ndarray:
     """Typical magnitude of each state, to turn the relative atol into absolute ones."""
     p = params[0]
-    scales = np.ones(L.N_STATES)
-    scales[L.S_CAP_PRESSURE] = p[L.P_PS]
-    scales[L.S_ROD_PRESSURE] = p[L.P_PS]
-    mass = p[L.P_PS] * p[L.P_CAP_AREA] * (p[L.P_STROKE] + p[L.P_CAP_DEAD]) / (
-        p[L.P_R] * p[L.P_TS])
-    scales[L.S_CAP_MASS] = mass
-    scales[L.S_ROD_MASS] = mass
-    scales[L.S_SPOOL] = 1.0
-    scales[L.S_BRISTLE] = max(p[L.P_FS], 1e-3) / max(p[L.P_SIGMA0], 1.0)
-    scales[L.S_AIR_CONSUMED] = mass
-    scales[L.S_POSITION] = p[L.P_STROKE]
-    scales[L.S_VELOCITY] = 0.1
+    scales = np.ones(layout.N_STATES)
+    scales[layout.S_CAP_PRESSURE] = p[layout.P_PS]
+    scales[layout.S_ROD_PRESSURE] = p[layout.P_PS]
+    mass = (
+        p[layout.P_PS]
+        * p[layout.P_CAP_AREA]
+        * (p[layout.P_STROKE] + p[layout.P_CAP_DEAD])
+        / (p[layout.P_R] * p[layout.P_TS])
+    )
+    scales[layout.S_CAP_MASS] = mass
+    scales[layout.S_ROD_MASS] = mass
+    scales[layout.S_SPOOL] = 1.0
+    scales[layout.S_BRISTLE] = max(p[layout.P_FS], 1e-3) / max(p[layout.P_SIGMA0], 1.0)
+    scales[layout.S_AIR_CONSUMED] = mass
+    scales[layout.S_POSITION] = p[layout.P_STROKE]
+    scales[layout.S_VELOCITY] = 0.1
     return scales
 
 
@@ -231,7 +269,7 @@ def simulate_rig_reference(
     method = {"radau": "Radau", "lsoda": "LSODA"}.get(setup.simulation.integrator, "Radau")
     params = pack_rig_parameters(setup)
     p = params[0]
-    if int(p[L.P_FRICTION_MODEL]) in SET_VALUED_MODELS:
+    if int(p[layout.P_FRICTION_MODEL]) in SET_VALUED_MODELS:
         raise ReferenceSolverError(
             f"simulation.integrator = {setup.simulation.integrator!r} needs a smooth friction "
             f"model; friction.model = {setup.actuator.friction.model!r} is set-valued "
@@ -246,17 +284,17 @@ def simulate_rig_reference(
     atol = setup.simulation.absolute_tolerance * _tolerance_scales(params)
     total = int(signal.shape[0])
     rows = np.zeros((total, N_COLUMNS))
-    out = np.zeros(L.N_OUTPUTS)
+    out = np.zeros(layout.N_OUTPUTS)
     done = 0
     flushed = 0
     interrupted = False
     started = time.perf_counter()
-    spacer = p[L.P_SPACER] == 1.0
+    spacer = p[layout.P_SPACER] == 1.0
     try:
         for k in range(total):
             if closed_loop:
                 reference = float(signal[k])
-                command = pid_update(gains, controller, reference, y[L.S_POSITION], dt)
+                command = pid_update(gains, controller, reference, y[layout.S_POSITION], dt)
             else:
                 reference = math.nan
                 command = float(signal[k])
@@ -264,32 +302,47 @@ def simulate_rig_reference(
             before = y.copy()
             solution = solve_ivp(
                 lambda _t, state, u=command, ps=supply_pressure: rig_rates(p, state, u, ps),
-                (0.0, dt), y, method=method, rtol=rtol, atol=atol,
+                (0.0, dt),
+                y,
+                method=method,
+                rtol=rtol,
+                atol=atol,
             )
             if not solution.success:
-                raise ReferenceSolverError(f"solve_ivp failed at t = {k * dt:.4f} s: "
-                                           f"{solution.message}")
+                raise ReferenceSolverError(
+                    f"solve_ivp failed at t = {k * dt:.4f} s: {solution.message}"
+                )
             y = solution.y[:, -1].copy()
-            drawn = y[L.S_AIR_CONSUMED] - before[L.S_AIR_CONSUMED]
-            supply[L.SUPPLY_DRAWN_MASS] += drawn
-            if supply[L.SUPPLY_MODEL] == 1.0:
-                supply[L.SUPPLY_TANK_PRESSURE] -= (
-                    supply[L.SUPPLY_GAS_CONSTANT] * supply[L.SUPPLY_TANK_TEMPERATURE] * drawn
-                    / supply[L.SUPPLY_TANK_VOLUME])
+            drawn = y[layout.S_AIR_CONSUMED] - before[layout.S_AIR_CONSUMED]
+            supply[layout.SUPPLY_DRAWN_MASS] += drawn
+            if supply[layout.SUPPLY_MODEL] == 1.0:
+                supply[layout.SUPPLY_TANK_PRESSURE] -= (
+                    supply[layout.SUPPLY_GAS_CONSTANT]
+                    * supply[layout.SUPPLY_TANK_TEMPERATURE]
+                    * drawn
+                    / supply[layout.SUPPLY_TANK_VOLUME]
+                )
             out[:] = 0.0
-            out[L.O_CAP_FLOW] = y[L.S_CAP_MASS] - before[L.S_CAP_MASS]
-            out[L.O_ROD_FLOW] = y[L.S_ROD_MASS] - before[L.S_ROD_MASS]
-            out[L.O_SUPPLY_DRAW] = drawn
-            finish_outputs(p, y, y[L.S_POSITION], dt, out)
+            out[layout.O_CAP_FLOW] = y[layout.S_CAP_MASS] - before[layout.S_CAP_MASS]
+            out[layout.O_ROD_FLOW] = y[layout.S_ROD_MASS] - before[layout.S_ROD_MASS]
+            out[layout.O_SUPPLY_DRAW] = drawn
+            finish_outputs(p, y, y[layout.S_POSITION], dt, out)
             if spacer:
-                out[L.O_END_STOP_FORCE] = -(out[L.O_PNEUMATIC_FORCE] + p[L.P_GRAVITY_FORCE])
+                out[layout.O_END_STOP_FORCE] = -(
+                    out[layout.O_PNEUMATIC_FORCE] + p[layout.P_GRAVITY_FORCE]
+                )
             else:
-                out[L.O_FRICTION_FORCE] = friction_of(p, y[L.S_VELOCITY], y[L.S_BRISTLE])
-                out[L.O_END_STOP_FORCE] = end_stop_force(
-                    y[L.S_POSITION], y[L.S_VELOCITY], p[L.P_STROKE], p[L.P_STOP_STIFFNESS],
-                    p[L.P_STOP_DAMPING])
-            write_row(rows[k], (k + 1) * dt, command, reference, p, y, out,
-                      supply_pressure_now(p, supply))
+                out[layout.O_FRICTION_FORCE] = friction_of(
+                    p, y[layout.S_VELOCITY], y[layout.S_BRISTLE]
+                )
+                out[layout.O_END_STOP_FORCE] = end_stop_force(
+                    y[layout.S_POSITION],
+                    y[layout.S_VELOCITY],
+                    p[layout.P_STROKE],
+                    p[layout.P_STOP_STIFFNESS],
+                    p[layout.P_STOP_DAMPING],
+                )
+            write_row(rows[k], (k + 1) * dt, command, reference, p, y, out, supply)
             done = k + 1
             if done - flushed >= 100 or done == total:
                 _record(recorder, rows[flushed:done])
