@@ -435,4 +435,12 @@ class RigSetup(_Model):
                 self.rig.initial_position,
                 f"should be within [0, cylinder.stroke] = [0, {stroke:g} m]",
             )
+        friction = self.actuator.friction.model
+        if self.simulation.integrator != "fixed" and friction in ("coulomb", "coulomb_viscous"):
+            _fail(
+                "simulation.integrator",
+                self.simulation.integrator,
+                f'should be "fixed" with the set-valued friction.model = "{friction}" '
+                '(adaptive solvers need "stribeck_tanh", "lugre" or "viscous")',
+            )
         return self

@@ -1,0 +1,115 @@
+"""Command line: runs write their folders, bad input exits 2 with a message, Ctrl-C keeps data."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.io import savemat
+
+from pneumaquad.params import load_rig
+from pneumaquad.recording import read_recording
+from pneumaquad.rig import signals
+from pneumaquad.rig.experiment import run_rig_experiment
+
+CLI = [sys.executable, "-c", "from pneumaquad.cli import main; main()"]
+
+
+def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([*CLI, *args], capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+def test_step_run_writes_folder(tmp_path: Path) -> None:
+    out = tmp_path / "step"
+    done = run_cli("rig", "step", "6 V", "--duration", "2 s", "--step-time", "0.5 s",
+                   "-o", str(out), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    for name in ("parameters.toml", "recording.csv", "recording.parquet", "summary.json",
+                 "rig.png"):
+        assert (out / name).is_file(), name
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["steps"] == 2000
+    assert summary["interrupted"] is False
+    # The piston ends extended against the stop: a 6 V command extends (cap port 2).
+    assert summary["final position [m]"] == pytest.approx(1.75 * 0.0254, abs=1e-3)
+    # The resolved parameters load back and reproduce the run's set.
+    assert load_rig(out / "parameters.toml") == load_rig("thesis-rig")
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (("rig", "step", "6 kg"), "VOLTAGE: '6 kg' has dimension [mass]"),
+        (("rig", "step", "12 V"), "VOLTAGE"),
+        (("rig", "step", "6 V", "--set", 'supply.supply_pressure="50 kg"'),
+         "supply.supply_pressure: '50 kg'"),
+        (("rig", "step", "6 V", "--set", "cylinder.bore=\"-1 in\""), "cylinder.bore"),
+        (("rig", "step", "6 V", "--set", "cylinder.colour=1"), "cylinder.colour"),
+        (("rig", "step", "6 V", "--params", "no-such-set"), "no-such-set"),
+        (("rig", "track", "sine", "--amplitude", "3 psi"), "--amplitude"),
+        (("rig", "track", "wobble"), "REFERENCE"),
+        (("rig", "track", "file", "--file", "missing.csv"), "missing.csv"),
+        (("rig", "step", "6 V", "--set", 'simulation.integrator="radau"', "--set",
+          'friction.model="coulomb"'), "set-valued friction.model"),
+    ],
+)
+def test_bad_input_exits_2_without_traceback(tmp_path: Path, args, fragment: str) -> None:
+    done = run_cli(*args, cwd=tmp_path)
+    assert done.returncode == 2
+    assert fragment in done.stderr
+    assert "Traceback" not in done.stderr
+    assert not (tmp_path / "runs").exists() or not any((tmp_path / "runs").iterdir())
+
+
+def test_interrupted_run_keeps_recording(tmp_path: Path) -> None:
+    """Ctrl-C between chunks: the part that ran is recorded, flushed and readable."""
+    setup = load_rig("thesis-rig")
+    signal = signals.sine(0.02, 0.005, 0.5, 5.0, setup.simulation.control_step)
+    calls = []
+
+    def interrupt_after_two_chunks(done: int, total: int) -> None:
+        calls.append(done)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+
+    result, summary = run_rig_experiment(setup, tmp_path, signal, True, "interrupted",
+                                         progress=interrupt_after_two_chunks)
+    assert result.interrupted and summary["interrupted"]
+    recording = read_recording(tmp_path / "recording.csv")
+    assert recording["time [s]"].size == calls[-1] == summary["steps"]
+    assert np.all(np.isfinite(recording["position [m]"]))
+    assert (tmp_path / "recording.parquet").is_file()
+    assert (tmp_path / "rig.png").is_file()
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".mat"])
+def test_recorded_reference_file(tmp_path: Path, suffix: str) -> None:
+    times = np.linspace(0.0, 2.0, 201)
+    millimetres = 22.0 + 5.0 * np.sin(2 * np.pi * times)
+    path = tmp_path / f"lab{suffix}"
+    if suffix == ".csv":
+        np.savetxt(path, np.column_stack([times, millimetres]), delimiter=",",
+                   header="t,x", comments="")
+    else:
+        savemat(path, {"t": times, "x": millimetres})
+    reference = signals.recorded_reference(path, "t", "x", 1e-3, 1e-3)
+    assert reference.size == 2000
+    grid = np.arange(2000) * 1e-3
+    expected = 0.022 + 0.005 * np.sin(2 * np.pi * grid)
+    assert np.max(np.abs(reference - expected)) < 2e-5  # linear interpolation of 10 ms data
+    out = tmp_path / "run"
+    done = run_cli("rig", "track", "file", "--file", str(path), "--time-column", "t",
+                   "--position-column", "x", "--position-unit", "mm", "-o", str(out),
+                   cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["steps"] == 2000
+
+
+def test_recorded_reference_rejects_non_monotonic_time(tmp_path: Path) -> None:
+    path = tmp_path / "bad.csv"
+    path.write_text("t,x\n0,1\n0.2,2\n0.1,3\n")
+    with pytest.raises(signals.RecordedReferenceError, match="not increasing"):
+        signals.recorded_reference(path, "t", "x", 1.0, 1e-3)
