@@ -23,11 +23,26 @@ def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 
 def test_step_run_writes_folder(tmp_path: Path) -> None:
     out = tmp_path / "step"
-    done = run_cli("rig", "step", "6 V", "--duration", "2 s", "--step-time", "0.5 s",
-                   "-o", str(out), cwd=tmp_path)
+    done = run_cli(
+        "rig",
+        "step",
+        "6 V",
+        "--duration",
+        "2 s",
+        "--step-time",
+        "0.5 s",
+        "-o",
+        str(out),
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr
-    for name in ("parameters.toml", "recording.csv", "recording.parquet", "summary.json",
-                 "rig.png"):
+    for name in (
+        "parameters.toml",
+        "recording.csv",
+        "recording.parquet",
+        "summary.json",
+        "rig.png",
+    ):
         assert (out / name).is_file(), name
     summary = json.loads((out / "summary.json").read_text())
     assert summary["steps"] == 2000
@@ -43,16 +58,28 @@ def test_step_run_writes_folder(tmp_path: Path) -> None:
     [
         (("rig", "step", "6 kg"), "VOLTAGE: '6 kg' has dimension [mass]"),
         (("rig", "step", "12 V"), "VOLTAGE"),
-        (("rig", "step", "6 V", "--set", 'supply.supply_pressure="50 kg"'),
-         "supply.supply_pressure: '50 kg'"),
-        (("rig", "step", "6 V", "--set", "cylinder.bore=\"-1 in\""), "cylinder.bore"),
+        (
+            ("rig", "step", "6 V", "--set", 'supply.supply_pressure="50 kg"'),
+            "supply.supply_pressure: '50 kg'",
+        ),
+        (("rig", "step", "6 V", "--set", 'cylinder.bore="-1 in"'), "cylinder.bore"),
         (("rig", "step", "6 V", "--set", "cylinder.colour=1"), "cylinder.colour"),
         (("rig", "step", "6 V", "--params", "no-such-set"), "no-such-set"),
         (("rig", "track", "sine", "--amplitude", "3 psi"), "--amplitude"),
         (("rig", "track", "wobble"), "REFERENCE"),
         (("rig", "track", "file", "--file", "missing.csv"), "missing.csv"),
-        (("rig", "step", "6 V", "--set", 'simulation.integrator="radau"', "--set",
-          'friction.model="coulomb"'), "set-valued friction.model"),
+        (
+            (
+                "rig",
+                "step",
+                "6 V",
+                "--set",
+                'simulation.integrator="radau"',
+                "--set",
+                'friction.model="coulomb"',
+            ),
+            "set-valued friction.model",
+        ),
     ],
 )
 def test_bad_input_exits_2_without_traceback(tmp_path: Path, args, fragment: str) -> None:
@@ -74,8 +101,9 @@ def test_interrupted_run_keeps_recording(tmp_path: Path) -> None:
         if len(calls) == 2:
             raise KeyboardInterrupt
 
-    result, summary = run_rig_experiment(setup, tmp_path, signal, True, "interrupted",
-                                         progress=interrupt_after_two_chunks)
+    result, summary = run_rig_experiment(
+        setup, tmp_path, signal, True, "interrupted", progress=interrupt_after_two_chunks
+    )
     assert result.interrupted and summary["interrupted"]
     recording = read_recording(tmp_path / "recording.csv")
     assert recording["time [s]"].size == calls[-1] == summary["steps"]
@@ -90,8 +118,9 @@ def test_recorded_reference_file(tmp_path: Path, suffix: str) -> None:
     millimetres = 22.0 + 5.0 * np.sin(2 * np.pi * times)
     path = tmp_path / f"lab{suffix}"
     if suffix == ".csv":
-        np.savetxt(path, np.column_stack([times, millimetres]), delimiter=",",
-                   header="t,x", comments="")
+        np.savetxt(
+            path, np.column_stack([times, millimetres]), delimiter=",", header="t,x", comments=""
+        )
     else:
         savemat(path, {"t": times, "x": millimetres})
     reference = signals.recorded_reference(path, "t", "x", 1e-3, 1e-3)
@@ -100,9 +129,22 @@ def test_recorded_reference_file(tmp_path: Path, suffix: str) -> None:
     expected = 0.022 + 0.005 * np.sin(2 * np.pi * grid)
     assert np.max(np.abs(reference - expected)) < 2e-5  # linear interpolation of 10 ms data
     out = tmp_path / "run"
-    done = run_cli("rig", "track", "file", "--file", str(path), "--time-column", "t",
-                   "--position-column", "x", "--position-unit", "mm", "-o", str(out),
-                   cwd=tmp_path)
+    done = run_cli(
+        "rig",
+        "track",
+        "file",
+        "--file",
+        str(path),
+        "--time-column",
+        "t",
+        "--position-column",
+        "x",
+        "--position-unit",
+        "mm",
+        "-o",
+        str(out),
+        cwd=tmp_path,
+    )
     assert done.returncode == 0, done.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["steps"] == 2000
