@@ -68,7 +68,7 @@ def test_thesis_rig_loads_as_rig() -> None:
     setup = load_rig("thesis-rig")
     assert isinstance(setup, RigSetup)
     assert setup.rig.orientation_angle == pytest.approx(math.pi / 2)
-    assert setup.simulation.substeps == 10
+    assert setup.simulation.substeps == 5
     assert setup.rig.spacer is False
 
 

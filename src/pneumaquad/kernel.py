@@ -17,8 +17,8 @@ near zero velocity stay stable, and the Coulomb models get an exact stick/slip s
 import math
 
 import numpy as np
-from numba import njit
 
+from pneumaquad.jit import compiled
 from pneumaquad.layout import (
     FLOW_ISO6358,
     N_OUTPUTS,
@@ -107,6 +107,7 @@ from pneumaquad.layout import (
     VALVE_SIMPLE,
 )
 from pneumaquad.physics.chamber import (
+    THERMO_HEAT_TRANSFER,
     chamber_pressure_rate,
     chamber_temperature,
     chamber_volume_cap,
@@ -135,7 +136,7 @@ from pneumaquad.physics.valve import (
 )
 
 
-@njit(cache=True)
+@compiled
 def supply_pressure_now(p, supply) -> float:
     """Pressure delivered by the regulator: the set point, or less if the tank is lower."""
     if supply[SUPPLY_MODEL] == 1.0:
@@ -143,7 +144,7 @@ def supply_pressure_now(p, supply) -> float:
     return p[P_PS]
 
 
-@njit(cache=True)
+@compiled
 def valve_connections(p, centered: float, supply_pressure: float):
     """What each chamber is connected to at a centered valve voltage.
 
@@ -191,7 +192,7 @@ def valve_connections(p, centered: float, supply_pressure: float):
     return cap_source, cap_area, rod_source, rod_area
 
 
-@njit(cache=True)
+@compiled
 def port_flow(p, conductance: float, source_pressure: float, pressure: float, temperature: float):
     """Mass flow into a chamber from its valve port [kg/s] (air enters at supply temperature)."""
     if p[P_FLOW_FORM] == FLOW_ISO6358:
@@ -218,10 +219,9 @@ def port_flow(p, conductance: float, source_pressure: float, pressure: float, te
     )
 
 
-@njit(cache=True)
-def chamber_rate(p, pressure, mass, volume, volume_rate, flow_in, wall_area):
-    """dP/dt of one chamber (eq 4.1.10) given its net inflow."""
-    temperature = chamber_temperature(pressure, volume, mass, p[P_R])
+@compiled
+def chamber_rate(p, pressure, temperature, volume, volume_rate, flow_in, wall_area):
+    """dP/dt of one chamber (eq 4.1.10) given its temperature and net inflow."""
     flow_temperature = p[P_TS] if flow_in > 0.0 else temperature
     return chamber_pressure_rate(
         pressure,
@@ -241,7 +241,7 @@ def chamber_rate(p, pressure, mass, volume, volume_rate, flow_in, wall_area):
     )
 
 
-@njit(cache=True)
+@compiled
 def pneumatic_rates(
     p,
     cap_pressure,
@@ -266,14 +266,29 @@ def pneumatic_rates(
     rod_temperature = chamber_temperature(rod_pressure, rod_volume, rod_mass, p[P_R])
     cap_flow = port_flow(p, cap_conductance, cap_source, cap_pressure, cap_temperature)
     rod_flow = port_flow(p, rod_conductance, rod_source, rod_pressure, rod_temperature)
-    end_faces = 0.5 * math.pi * p[P_BORE] * p[P_BORE]
-    cap_wall = end_faces + math.pi * p[P_BORE] * cap_volume / p[P_CAP_AREA]
-    rod_wall = end_faces + math.pi * p[P_BORE] * rod_volume / p[P_ROD_AREA]
+    cap_wall = 0.0
+    rod_wall = 0.0
+    if p[P_THERMO_MODEL] == THERMO_HEAT_TRANSFER:
+        end_faces = 0.5 * math.pi * p[P_BORE] * p[P_BORE]
+        cap_wall = end_faces + math.pi * p[P_BORE] * cap_volume / p[P_CAP_AREA]
+        rod_wall = end_faces + math.pi * p[P_BORE] * rod_volume / p[P_ROD_AREA]
     cap_rate = chamber_rate(
-        p, cap_pressure, cap_mass, cap_volume, p[P_CAP_AREA] * velocity, cap_flow, cap_wall
+        p,
+        cap_pressure,
+        cap_temperature,
+        cap_volume,
+        p[P_CAP_AREA] * velocity,
+        cap_flow,
+        cap_wall,
     )
     rod_rate = chamber_rate(
-        p, rod_pressure, rod_mass, rod_volume, -p[P_ROD_AREA] * velocity, rod_flow, rod_wall
+        p,
+        rod_pressure,
+        rod_temperature,
+        rod_volume,
+        -p[P_ROD_AREA] * velocity,
+        rod_flow,
+        rod_wall,
     )
     draw = 0.0
     exhaust = p[P_PE]
@@ -284,25 +299,22 @@ def pneumatic_rates(
     return cap_rate, rod_rate, cap_flow, rod_flow, draw
 
 
-@njit(cache=True)
+@compiled
 def spool_update(p, spool: float, target: float, time_step: float) -> float:
-    """First-order spool lag (valve bandwidth) advanced exactly over a step; off when tau = 0."""
+    """First-order spool lag (valve bandwidth) advanced exactly over a step (tau > 0)."""
     tau = p[P_SPOOL_TAU]
-    if tau <= 0.0:
-        return target
     return target + (spool - target) * math.exp(-time_step / tau)
 
 
-@njit(cache=True)
-def heun_pneumatics(p, s, position, velocity, time_step, supply_pressure, out):
+@compiled
+def heun_pneumatics(p, s, position, velocity, time_step, connections, out):
     """One Heun substep of the chamber states with the piston moving at constant velocity.
 
-    Updates s in place; adds time_step-weighted flows to out[O_CAP_FLOW], out[O_ROD_FLOW]
-    and out[O_SUPPLY_DRAW] (callers divide by the step length).
+    ``connections`` is the tuple of :func:`valve_connections` for the substep. Updates s
+    in place; adds time_step-weighted flows to out[O_CAP_FLOW], out[O_ROD_FLOW] and
+    out[O_SUPPLY_DRAW] (callers divide by the step length).
     """
-    cap_source, cap_conductance, rod_source, rod_conductance = valve_connections(
-        p, s[S_SPOOL], supply_pressure
-    )
+    cap_source, cap_conductance, rod_source, rod_conductance = connections
     pc = s[S_CAP_PRESSURE]
     pr = s[S_ROD_PRESSURE]
     mc = s[S_CAP_MASS]
@@ -350,7 +362,7 @@ def heun_pneumatics(p, s, position, velocity, time_step, supply_pressure, out):
     return drawn
 
 
-@njit(cache=True)
+@compiled
 def friction_of(p, velocity, bristle):
     """Friction force of actuator row p at a velocity and bristle deflection [N]."""
     return friction_force(
@@ -369,7 +381,7 @@ def friction_of(p, velocity, bristle):
     )
 
 
-@njit(cache=True)
+@compiled
 def advance_bristle(p, bristle, velocity, time_step):
     """LuGre bristle deflection after a step at constant velocity (unchanged for others)."""
     if int(p[P_FRICTION_MODEL]) != FRICTION_LUGRE:
@@ -378,7 +390,7 @@ def advance_bristle(p, bristle, velocity, time_step):
     return lugre_bristle_update(bristle, velocity, time_step, p[P_SIGMA0], g)
 
 
-@njit(cache=True)
+@compiled
 def finish_outputs(p, s, position, control_step, out):
     """Turn accumulated flows into means and fill forces and temperatures at step end."""
     out[O_CAP_FLOW] /= control_step
@@ -406,7 +418,7 @@ def finish_outputs(p, s, position, control_step, out):
     )
 
 
-@njit(cache=True)
+@compiled
 def draw_from_tank(supply, drawn_mass):
     """Isothermal tank: remove the drawn mass, dP = -R·T·dm/V."""
     supply[SUPPLY_DRAWN_MASS] += drawn_mass
@@ -416,7 +428,7 @@ def draw_from_tank(supply, drawn_mass):
         supply[SUPPLY_TANK_PRESSURE] = max(supply[SUPPLY_TANK_PRESSURE], 0.0)
 
 
-@njit(cache=True)
+@compiled
 def step_actuators(
     params, state, commands, positions, velocities, control_step, substeps, supply, outputs
 ):
@@ -457,9 +469,15 @@ def step_actuators(
         target = centered_voltage(commands[index], p[P_OFFSET], p[P_UMIN], p[P_UMAX])
         position = positions[index]
         velocity = velocities[index]
+        lagging = p[P_SPOOL_TAU] > 0.0
+        if not lagging:
+            s[S_SPOOL] = target
+        connections = valve_connections(p, s[S_SPOOL], supply_pressure)
         for _ in range(substeps):
-            s[S_SPOOL] = spool_update(p, s[S_SPOOL], target, h)
-            total_drawn += heun_pneumatics(p, s, position, velocity, h, supply_pressure, out)
+            if lagging:
+                s[S_SPOOL] = spool_update(p, s[S_SPOOL], target, h)
+                connections = valve_connections(p, s[S_SPOOL], supply_pressure)
+            total_drawn += heun_pneumatics(p, s, position, velocity, h, connections, out)
             position += h * velocity
         s[S_BRISTLE] = advance_bristle(p, s[S_BRISTLE], velocity, control_step)
         s[S_POSITION] = position
@@ -469,7 +487,7 @@ def step_actuators(
     draw_from_tank(supply, total_drawn)
 
 
-@njit(cache=True)
+@compiled
 def rig_mechanics_substep(p, s, time_step, out):
     """Advance piston position and velocity of a single-DoF rig by one substep.
 
@@ -538,7 +556,7 @@ def rig_mechanics_substep(p, s, time_step, out):
     out[O_END_STOP_FORCE] = stop
 
 
-@njit(cache=True)
+@compiled
 def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
     """Advance N single-DoF rigs (cylinder + load) by one control step.
 
@@ -561,11 +579,15 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
         supply_pressure = supply_pressure_now(p, supply)
         target = centered_voltage(commands[index], p[P_OFFSET], p[P_UMIN], p[P_UMAX])
         spacer = p[P_SPACER] == 1.0
+        lagging = p[P_SPOOL_TAU] > 0.0
+        if not lagging:
+            s[S_SPOOL] = target
+        connections = valve_connections(p, s[S_SPOOL], supply_pressure)
         for _ in range(substeps):
-            s[S_SPOOL] = spool_update(p, s[S_SPOOL], target, h)
-            total_drawn += heun_pneumatics(
-                p, s, s[S_POSITION], s[S_VELOCITY], h, supply_pressure, out
-            )
+            if lagging:
+                s[S_SPOOL] = spool_update(p, s[S_SPOOL], target, h)
+                connections = valve_connections(p, s[S_SPOOL], supply_pressure)
+            total_drawn += heun_pneumatics(p, s, s[S_POSITION], s[S_VELOCITY], h, connections, out)
             if not spacer:
                 rig_mechanics_substep(p, s, h, out)
         finish_outputs(p, s, s[S_POSITION], control_step, out)
@@ -577,7 +599,7 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
     draw_from_tank(supply, total_drawn)
 
 
-@njit(cache=True)
+@compiled
 def rig_rates(p, y, command, supply_pressure):
     """Right-hand side of the rig ODE for the adaptive reference solver.
 

@@ -7,7 +7,8 @@ kick on reference steps) through a first-order filter, the integral clamped to
 """
 
 import numpy as np
-from numba import njit
+
+from pneumaquad.jit import compiled
 
 G_KP = 0  # proportional gain [V/m]
 G_KI = 1  # integral gain [V/(m s)]
@@ -49,7 +50,7 @@ def pid_gains(
     return gains
 
 
-@njit(cache=True)
+@compiled
 def pid_update(gains, state, reference: float, measurement: float, sample_time: float) -> float:
     """One controller sample.
 

@@ -4,7 +4,7 @@ Piston position x [m] is the extension from full retraction: the cap chamber gro
 the rod chamber shrinks. Dead volumes are expressed as lengths of the chamber's own area.
 """
 
-from numba import njit
+from pneumaquad.jit import compiled
 
 #: Thermodynamics model codes.
 THERMO_ADIABATIC = 0
@@ -12,7 +12,7 @@ THERMO_POLYTROPIC = 1
 THERMO_HEAT_TRANSFER = 2
 
 
-@njit(cache=True)
+@compiled
 def chamber_volume_cap(position: float, cap_area: float, cap_dead_length: float) -> float:
     """Cap-side volume V = A_cap·(x + x_dead) [m^3] (x_abs of eq 4.1.7).
 
@@ -28,7 +28,7 @@ def chamber_volume_cap(position: float, cap_area: float, cap_dead_length: float)
     return cap_area * max(position + cap_dead_length, 1e-6)
 
 
-@njit(cache=True)
+@compiled
 def chamber_volume_rod(
     position: float, stroke: float, rod_area: float, rod_dead_length: float
 ) -> float:
@@ -48,7 +48,7 @@ def chamber_volume_rod(
     return rod_area * max(stroke - position + rod_dead_length, 1e-6)
 
 
-@njit(cache=True)
+@compiled
 def chamber_temperature(pressure: float, volume: float, mass: float, gas_constant: float) -> float:
     """Ideal-gas temperature T = P·V / (m·R) (eq 4.1.7).
 
@@ -71,7 +71,7 @@ def chamber_temperature(pressure: float, volume: float, mass: float, gas_constan
     return pressure * volume / (mass * gas_constant)
 
 
-@njit(cache=True)
+@compiled
 def chamber_pressure_rate(
     pressure: float,
     volume: float,

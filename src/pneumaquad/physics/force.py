@@ -2,10 +2,10 @@
 
 import math
 
-from numba import njit
+from pneumaquad.jit import compiled
 
 
-@njit(cache=True)
+@compiled
 def piston_force(
     cap_pressure: float,
     rod_pressure: float,
@@ -36,7 +36,7 @@ def piston_force(
     )
 
 
-@njit(cache=True)
+@compiled
 def gravity_force(mass: float, gravity: float, orientation_angle: float) -> float:
     """Weight of the moving mass along the extension direction.
 
@@ -58,7 +58,7 @@ def gravity_force(mass: float, gravity: float, orientation_angle: float) -> floa
     return mass * gravity * math.sin(orientation_angle)
 
 
-@njit(cache=True)
+@compiled
 def end_stop_force(
     position: float, velocity: float, stroke: float, stiffness: float, damping: float
 ) -> float:

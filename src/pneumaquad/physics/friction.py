@@ -9,7 +9,7 @@ state z that holds the piston still below breakaway.
 
 import math
 
-from numba import njit
+from pneumaquad.jit import compiled
 
 FRICTION_VISCOUS = 0
 FRICTION_COULOMB = 1
@@ -22,7 +22,7 @@ FRICTION_LUGRE = 4
 SET_VALUED_MODELS = (FRICTION_COULOMB, FRICTION_COULOMB_VISCOUS)
 
 
-@njit(cache=True)
+@compiled
 def stribeck_curve(
     velocity: float,
     static_force: float,
@@ -53,7 +53,7 @@ def stribeck_curve(
     )
 
 
-@njit(cache=True)
+@compiled
 def stribeck_tanh_force(
     velocity: float,
     static_force: float,
@@ -89,7 +89,7 @@ def stribeck_tanh_force(
     return g * math.tanh(tanh_coefficient * velocity) + viscous_coefficient * velocity
 
 
-@njit(cache=True)
+@compiled
 def lugre_bristle_rate(
     velocity: float, deflection: float, bristle_stiffness: float, stribeck_force: float
 ) -> float:
@@ -114,7 +114,7 @@ def lugre_bristle_rate(
     return velocity - bristle_stiffness * abs(velocity) * deflection / stribeck_force
 
 
-@njit(cache=True)
+@compiled
 def lugre_bristle_update(
     deflection: float,
     velocity: float,
@@ -155,7 +155,7 @@ def lugre_bristle_update(
     return steady + (deflection - steady) * decay
 
 
-@njit(cache=True)
+@compiled
 def friction_force(
     model: int,
     velocity: float,
@@ -233,7 +233,7 @@ def friction_force(
     return coulomb_force * sign + viscous_coefficient * velocity
 
 
-@njit(cache=True)
+@compiled
 def friction_damping(
     model: int,
     velocity: float,

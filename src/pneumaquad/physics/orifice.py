@@ -6,7 +6,7 @@ pressures, and the upstream temperature is taken from whichever side is upstream
 
 import math
 
-from numba import njit
+from pneumaquad.jit import compiled
 
 #: ISO 8778 standard reference atmosphere (ANR) used by ISO 6358: density [kg/m^3].
 ISO_REFERENCE_DENSITY = 1.185
@@ -14,7 +14,7 @@ ISO_REFERENCE_DENSITY = 1.185
 ISO_REFERENCE_TEMPERATURE = 293.15
 
 
-@njit(cache=True)
+@compiled
 def orifice_coefficients(heat_capacity_ratio: float, gas_constant: float) -> tuple[float, float]:
     """Flow constants C1 (unchoked) and C2 (choked) of eq 4.1.8 and 4.1.9.
 
@@ -36,7 +36,7 @@ def orifice_coefficients(heat_capacity_ratio: float, gas_constant: float) -> tup
     return c1, c2
 
 
-@njit(cache=True)
+@compiled
 def orifice_flux(
     upstream_pressure: float,
     downstream_pressure: float,
@@ -90,7 +90,7 @@ def orifice_flux(
     return c1 * scale * power * math.sqrt(1.0 - ratio / power)
 
 
-@njit(cache=True)
+@compiled
 def orifice_mass_flow(
     effective_area: float,
     pressure_a: float,
@@ -144,7 +144,7 @@ def orifice_mass_flow(
     )
 
 
-@njit(cache=True)
+@compiled
 def iso6358_flux(
     upstream_pressure: float,
     downstream_pressure: float,
@@ -193,7 +193,7 @@ def iso6358_flux(
     return scale * math.sqrt(1.0 - shape * shape)
 
 
-@njit(cache=True)
+@compiled
 def iso6358_mass_flow(
     sonic_conductance: float,
     pressure_a: float,
@@ -232,7 +232,7 @@ def iso6358_mass_flow(
     )
 
 
-@njit(cache=True)
+@compiled
 def area_to_sonic_conductance(effective_area: float, c2: float) -> float:
     """Sonic conductance with the same choked flow as an orifice of a given area.
 

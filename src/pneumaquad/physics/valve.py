@@ -7,10 +7,10 @@ equally.
 
 import math
 
-from numba import njit
+from pneumaquad.jit import compiled
 
 
-@njit(cache=True)
+@compiled
 def centered_voltage(
     command_voltage: float, offset_voltage: float, min_voltage: float, max_voltage: float
 ) -> float:
@@ -37,7 +37,7 @@ def centered_voltage(
     return command_voltage - offset_voltage
 
 
-@njit(cache=True)
+@compiled
 def simple_valve_area(
     centered: float, max_area: float, leak_area: float, full_scale_voltage: float
 ) -> float:
@@ -66,7 +66,7 @@ def simple_valve_area(
     return max_area * abs(centered) / full_scale_voltage + leak_area
 
 
-@njit(cache=True)
+@compiled
 def polynomial_area(
     centered: float,
     negative_coefficients,
@@ -96,7 +96,7 @@ def polynomial_area(
     return max(area, 0.0)
 
 
-@njit(cache=True)
+@compiled
 def input_pressure(
     centered: float,
     supply_pressure: float,

@@ -11,12 +11,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from scipy.integrate import solve_ivp
 
 from pneumaquad import layout
 from pneumaquad.actuator import supply_state
 from pneumaquad.control.pid import N_CONTROLLER_STATES, pid_update
+from pneumaquad.jit import compiled
 from pneumaquad.kernel import (
     end_stop_force,
     finish_outputs,
@@ -62,7 +62,7 @@ class ReferenceSolverError(ValueError):
     """The adaptive reference cannot integrate this configuration."""
 
 
-@njit(cache=True)
+@compiled
 def write_row(row, sample_time, command, reference, p, s, out, supply):
     """Fill one recording row (layout of RIG_COLUMNS) from the state after a step."""
     row[0] = sample_time
@@ -89,7 +89,7 @@ def write_row(row, sample_time, command, reference, p, s, out, supply):
     )
 
 
-@njit(cache=True)
+@compiled
 def run_rig_chunk(
     params,
     state,
