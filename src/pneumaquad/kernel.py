@@ -126,6 +126,7 @@ from pneumaquad.physics.friction import (
 from pneumaquad.physics.orifice import (
     area_to_sonic_conductance,
     iso6358_mass_flow,
+    laminar_temperature,
     orifice_mass_flow,
 )
 from pneumaquad.physics.valve import (
@@ -220,15 +221,25 @@ def port_flow(p, conductance: float, source_pressure: float, pressure: float, te
 
 
 @compiled
-def chamber_rate(p, pressure, temperature, volume, volume_rate, flow_in, wall_area):
+def flow_temperature(p, source_pressure, pressure, temperature):
+    """Temperature of the air crossing a port [K]: supply temperature when filling, the
+    chamber's when emptying, blended to their mean near equal pressures (see
+    :func:`pneumaquad.physics.orifice.laminar_temperature`), so that the energy balance
+    stays smooth through zero flow."""
+    if source_pressure >= pressure:
+        return laminar_temperature(source_pressure, pressure, p[P_TS], temperature, p[P_LAMINAR])
+    return laminar_temperature(pressure, source_pressure, temperature, p[P_TS], p[P_LAMINAR])
+
+
+@compiled
+def chamber_rate(p, pressure, temperature, volume, volume_rate, flow_in, flow_temp, wall_area):
     """dP/dt of one chamber (eq 4.1.10) given its temperature and net inflow."""
-    flow_temperature = p[P_TS] if flow_in > 0.0 else temperature
     return chamber_pressure_rate(
         pressure,
         volume,
         volume_rate,
         flow_in,
-        flow_temperature,
+        flow_temp,
         temperature,
         wall_area,
         p[P_K],
@@ -279,6 +290,7 @@ def pneumatic_rates(
         cap_volume,
         p[P_CAP_AREA] * velocity,
         cap_flow,
+        flow_temperature(p, cap_source, cap_pressure, cap_temperature),
         cap_wall,
     )
     rod_rate = chamber_rate(
@@ -288,6 +300,7 @@ def pneumatic_rates(
         rod_volume,
         -p[P_ROD_AREA] * velocity,
         rod_flow,
+        flow_temperature(p, rod_source, rod_pressure, rod_temperature),
         rod_wall,
     )
     draw = 0.0
@@ -513,12 +526,21 @@ def rig_mechanics_substep(p, s, time_step, out):
         + p[P_GRAVITY_FORCE]
     )
     stop = end_stop_force(x, v, p[P_STROKE], p[P_STOP_STIFFNESS], p[P_STOP_DAMPING])
+    model = int(p[P_FRICTION_MODEL])
+    dry_model = model in (FRICTION_COULOMB, FRICTION_COULOMB_VISCOUS)
+    resting_on_stop = dry_model and v == 0.0 and stop != 0.0
+    if resting_on_stop:
+        # A piston stuck on a stop: the rigid stop reacts only as much as the load presses
+        # into it, and stores nothing, so when the load pulls away the contact spring's
+        # penetration is dropped and friction alone holds the piston (breakaway at Fs).
+        stop = max(0.0, -force) if stop > 0.0 else min(0.0, -force)
+        if stop == 0.0:
+            x = min(max(x, 0.0), p[P_STROKE])
     stiffness = 0.0
     stop_damping = 0.0
-    if stop != 0.0:
+    if stop != 0.0 and not resting_on_stop:
         stiffness = p[P_STOP_STIFFNESS]
         stop_damping = p[P_STOP_DAMPING]
-    model = int(p[P_FRICTION_MODEL])
     damping = friction_damping(
         model,
         v,
@@ -534,7 +556,7 @@ def rig_mechanics_substep(p, s, time_step, out):
         s[S_BRISTLE],
     )
     effective_mass = mass + h * (damping + stop_damping) + h * h * stiffness
-    if model in (FRICTION_COULOMB, FRICTION_COULOMB_VISCOUS):
+    if dry_model:
         viscous = p[P_CV] if model == FRICTION_COULOMB_VISCOUS else 0.0
         free = v + h * (force + stop - viscous * v - h * stiffness * v) / effective_mass
         needed = effective_mass * free / h
@@ -550,6 +572,15 @@ def rig_mechanics_substep(p, s, time_step, out):
         s[S_BRISTLE] = advance_bristle(p, s[S_BRISTLE], v, h)
         friction = friction_of(p, v, s[S_BRISTLE])
         v_new = v + h * (force + stop - friction - h * stiffness * v) / effective_mass
+        if model != FRICTION_LUGRE and v_new * v < 0.0:
+            # The friction force, taken at the old velocity, overshot through zero. A law
+            # of velocity alone is dissipative (F·v >= 0), so redo the step with its secant
+            # F/v as the implicit damping: without this, just past the Stribeck hump (where
+            # the tangent is almost zero) the velocity flips sign every substep.
+            secant = friction / v
+            if secant > damping:
+                effective_mass += h * (secant - damping)
+                v_new = v + h * (force + stop - friction - h * stiffness * v) / effective_mass
     s[S_VELOCITY] = v_new
     s[S_POSITION] = x + h * v_new
     out[O_FRICTION_FORCE] = friction

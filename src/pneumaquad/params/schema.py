@@ -435,6 +435,12 @@ class RigSetup(_Model):
                 self.rig.initial_position,
                 f"should be within [0, cylinder.stroke] = [0, {stroke:g} m]",
             )
+        if self.rig.load_mass + self.actuator.cylinder.piston_mass <= 0.0 and not self.rig.spacer:
+            _fail(
+                "rig.load_mass",
+                self.rig.load_mass,
+                "should make the moving mass (rig.load_mass + cylinder.piston_mass) positive",
+            )
         friction = self.actuator.friction.model
         if self.simulation.integrator != "fixed" and friction in ("coulomb", "coulomb_viscous"):
             _fail(

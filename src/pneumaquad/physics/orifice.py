@@ -122,26 +122,73 @@ def orifice_mass_flow(
         Mass flow [kg/s], positive from a to b.
     """
     if pressure_a >= pressure_b:
+        upstream_temperature = laminar_temperature(
+            pressure_a, pressure_b, temperature_a, temperature_b, laminar_ratio
+        )
         return effective_area * orifice_flux(
             pressure_a,
             pressure_b,
-            temperature_a,
+            upstream_temperature,
             heat_capacity_ratio,
             c1,
             c2,
             critical_ratio,
             laminar_ratio,
         )
+    upstream_temperature = laminar_temperature(
+        pressure_b, pressure_a, temperature_b, temperature_a, laminar_ratio
+    )
     return -effective_area * orifice_flux(
         pressure_b,
         pressure_a,
-        temperature_b,
+        upstream_temperature,
         heat_capacity_ratio,
         c1,
         c2,
         critical_ratio,
         laminar_ratio,
     )
+
+
+@compiled
+def laminar_temperature(
+    upstream_pressure: float,
+    downstream_pressure: float,
+    upstream_temperature: float,
+    downstream_temperature: float,
+    laminar_ratio: float,
+) -> float:
+    """Temperature to use for the flow: upstream, blended to the mean in the laminar band.
+
+    In the laminar band the flux is linear in the pressure difference divided by
+    sqrt(T). Moving T from the upstream value at the band's edge to the mean of both
+    sides at equal pressures makes the flow smooth through zero, where a chamber at
+    equilibrium sits; with the upstream temperature alone its slope would jump there
+    (by sqrt(T_a/T_b)), which stalls implicit solvers. Outside the band it is the
+    upstream temperature (eq 4.1.5–4.1.6, App. B.1.2 Port_2 l.52–62).
+
+    Parameters
+    ----------
+    upstream_pressure, downstream_pressure : float
+        Pu >= Pd [Pa].
+    upstream_temperature, downstream_temperature : float
+        [K].
+    laminar_ratio : float
+        Start of the laminar band [-].
+
+    Returns
+    -------
+    float
+        Temperature [K].
+    """
+    if upstream_pressure <= 0.0:
+        return upstream_temperature
+    ratio = downstream_pressure / upstream_pressure
+    if ratio <= laminar_ratio:
+        return upstream_temperature
+    weight = min((ratio - laminar_ratio) / (1.0 - laminar_ratio), 1.0)
+    mean = 0.5 * (upstream_temperature + downstream_temperature)
+    return upstream_temperature + (mean - upstream_temperature) * weight
 
 
 @compiled
@@ -224,11 +271,17 @@ def iso6358_mass_flow(
         Mass flow [kg/s], positive from a to b.
     """
     if pressure_a >= pressure_b:
-        return sonic_conductance * iso6358_flux(
-            pressure_a, pressure_b, temperature_a, critical_ratio, laminar_ratio
+        upstream_temperature = laminar_temperature(
+            pressure_a, pressure_b, temperature_a, temperature_b, laminar_ratio
         )
+        return sonic_conductance * iso6358_flux(
+            pressure_a, pressure_b, upstream_temperature, critical_ratio, laminar_ratio
+        )
+    upstream_temperature = laminar_temperature(
+        pressure_b, pressure_a, temperature_b, temperature_a, laminar_ratio
+    )
     return -sonic_conductance * iso6358_flux(
-        pressure_b, pressure_a, temperature_b, critical_ratio, laminar_ratio
+        pressure_b, pressure_a, upstream_temperature, critical_ratio, laminar_ratio
     )
 
 

@@ -26,7 +26,7 @@ from pneumaquad.kernel import (
     supply_pressure_now,
 )
 from pneumaquad.params.schema import RigSetup
-from pneumaquad.physics.friction import SET_VALUED_MODELS
+from pneumaquad.physics.friction import FRICTION_LUGRE
 from pneumaquad.recording import RunRecorder
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 
@@ -251,6 +251,67 @@ def _tolerance_scales(params: np.ndarray) -> np.ndarray:
     return scales
 
 
+def _active_states(p: np.ndarray) -> np.ndarray:
+    """Indices of the states the reference ODE integrates for this configuration.
+
+    States that feed nothing back (air consumed; the spool without lag; the bristle
+    outside LuGre; the piston in spacer mode) are left out: their all-zero Jacobian
+    columns make scipy's finite-difference Jacobian scaling overflow and Radau's Newton
+    iteration fail.
+    """
+    states = [
+        layout.S_CAP_PRESSURE,
+        layout.S_ROD_PRESSURE,
+        layout.S_CAP_MASS,
+        layout.S_ROD_MASS,
+    ]
+    if p[layout.P_SPOOL_TAU] > 0.0:
+        states.append(layout.S_SPOOL)
+    if int(p[layout.P_FRICTION_MODEL]) == FRICTION_LUGRE and p[layout.P_SPACER] != 1.0:
+        states.append(layout.S_BRISTLE)
+    if p[layout.P_SPACER] != 1.0:
+        states += [layout.S_POSITION, layout.S_VELOCITY]
+    return np.array(states)
+
+
+def _active_rates(_time, values, p, full_state, active, command, supply_pressure, _scales):
+    """Rates of the active states (scipy signature; the scales are for the Jacobian)."""
+    state = full_state.copy()
+    state[active] = values
+    return rig_rates(p, state, command, supply_pressure)[active]
+
+
+def _active_jacobian(_time, values, p, full_state, active, command, supply_pressure, scales):
+    """Forward-difference Jacobian of :func:`_active_rates` with steps set by state scale.
+
+    scipy's own estimate adapts its steps per column and overflows on columns that have no
+    effect at the current state (a chamber's mass at equilibrium, for one), after which
+    Radau's Newton iteration keeps failing. Steps of 1e-7 of each state's typical
+    magnitude avoid that.
+    """
+    state = full_state.copy()
+    state[active] = values
+    base = rig_rates(p, state, command, supply_pressure)[active]
+    jacobian = np.empty((active.size, active.size))
+    for column, index in enumerate(active):
+        step = 1e-7 * max(abs(values[column]), scales[column])
+        perturbed = state.copy()
+        perturbed[index] += step
+        jacobian[:, column] = rig_rates(p, perturbed, command, supply_pressure)[active] - base
+        jacobian[:, column] /= step
+    return jacobian
+
+
+def _drawn_mass(p, full_state, active, times, values, command, supply_pressure) -> float:
+    """Mass drawn from the supply over an interval: trapezoid rule on the solver's steps."""
+    rates = np.empty(times.size)
+    state = full_state.copy()
+    for index in range(times.size):
+        state[active] = values[:, index]
+        rates[index] = rig_rates(p, state, command, supply_pressure)[layout.S_AIR_CONSUMED]
+    return float(np.sum(0.5 * (rates[1:] + rates[:-1]) * np.diff(times)))
+
+
 def simulate_rig_reference(
     setup: RigSetup,
     signal: np.ndarray,
@@ -263,18 +324,13 @@ def simulate_rig_reference(
     Each control interval is integrated separately with the command held, from the same
     sampled state as the fixed-step loop, so the two differ only by integration error.
     The right-hand side is :func:`pneumaquad.kernel.rig_rates`, built from the same
-    physics functions as the compiled kernels. The set-valued Coulomb models have no ODE
-    form and are refused.
+    physics functions as the compiled kernels. (The set-valued Coulomb models have no
+    ODE form; parameter validation refuses them with an adaptive integrator.)
     """
     method = {"radau": "Radau", "lsoda": "LSODA"}.get(setup.simulation.integrator, "Radau")
     params = pack_rig_parameters(setup)
     p = params[0]
-    if int(p[layout.P_FRICTION_MODEL]) in SET_VALUED_MODELS:
-        raise ReferenceSolverError(
-            f"simulation.integrator = {setup.simulation.integrator!r} needs a smooth friction "
-            f"model; friction.model = {setup.actuator.friction.model!r} is set-valued "
-            "(use 'fixed', or friction.model = 'stribeck_tanh', 'lugre' or 'viscous')"
-        )
+    active = _active_states(p)
     y = rig_initial_state(setup, params)[0].copy()
     supply = supply_state(setup.actuator)
     gains = rig_controller_gains(setup)
@@ -282,6 +338,7 @@ def simulate_rig_reference(
     dt = setup.simulation.control_step
     rtol = setup.simulation.relative_tolerance
     atol = setup.simulation.absolute_tolerance * _tolerance_scales(params)
+    scales = _tolerance_scales(params)[active]
     total = int(signal.shape[0])
     rows = np.zeros((total, N_COLUMNS))
     out = np.zeros(layout.N_OUTPUTS)
@@ -301,18 +358,23 @@ def simulate_rig_reference(
             supply_pressure = supply_pressure_now(p, supply)
             before = y.copy()
             solution = solve_ivp(
-                lambda _t, state, u=command, ps=supply_pressure: rig_rates(p, state, u, ps),
+                _active_rates,
                 (0.0, dt),
-                y,
+                y[active],
                 method=method,
                 rtol=rtol,
-                atol=atol,
+                atol=atol[active],
+                jac=_active_jacobian,
+                args=(p, y, active, command, supply_pressure, scales),
             )
             if not solution.success:
                 raise ReferenceSolverError(
                     f"solve_ivp failed at t = {k * dt:.4f} s: {solution.message}"
                 )
-            y = solution.y[:, -1].copy()
+            y[layout.S_AIR_CONSUMED] += _drawn_mass(
+                p, y, active, solution.t, solution.y, command, supply_pressure
+            )
+            y[active] = solution.y[:, -1]
             drawn = y[layout.S_AIR_CONSUMED] - before[layout.S_AIR_CONSUMED]
             supply[layout.SUPPLY_DRAWN_MASS] += drawn
             if supply[layout.SUPPLY_MODEL] == 1.0:
