@@ -185,9 +185,10 @@ def breakdown(row: np.ndarray, substeps: int, repeats: int) -> dict[str, float]:
     figures = {}
     for name, call, per_step in (
         (
-            "valve_connections (1 per substep)",
+            # once per control step; once per substep only with a spool lag
+            "valve_connections (1 per step)",
             lambda: valve_loop(row, centered, row[layout.P_PS]),
-            substeps,
+            1,
         ),
         (
             "pneumatic_rates (2 per substep)",
