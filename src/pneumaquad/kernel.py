@@ -442,6 +442,33 @@ def draw_from_tank(supply, drawn_mass):
 
 
 @compiled
+def begin_control_step(p, s, out, command, supply):
+    """Reset an actuator's outputs and set up its valve for a control step.
+
+    Returns (target centered voltage [V], whether the spool lags, supply pressure [Pa],
+    valve connections). Without a spool lag the spool jumps to the target and the valve
+    map is evaluated here once for the whole step.
+    """
+    for column in range(N_OUTPUTS):
+        out[column] = 0.0
+    supply_pressure = supply_pressure_now(p, supply)
+    target = centered_voltage(command, p[P_OFFSET], p[P_UMIN], p[P_UMAX])
+    lagging = p[P_SPOOL_TAU] > 0.0
+    if not lagging:
+        s[S_SPOOL] = target
+    return target, lagging, supply_pressure, valve_connections(p, s[S_SPOOL], supply_pressure)
+
+
+@compiled
+def substep_connections(p, s, target, lagging, supply_pressure, connections, time_step):
+    """Valve connections for the next substep: moved with the spool lag, else unchanged."""
+    if not lagging:
+        return connections
+    s[S_SPOOL] = spool_update(p, s[S_SPOOL], target, time_step)
+    return valve_connections(p, s[S_SPOOL], supply_pressure)
+
+
+@compiled
 def step_actuators(
     params, state, commands, positions, velocities, control_step, substeps, supply, outputs
 ):
@@ -476,20 +503,15 @@ def step_actuators(
         p = params[index]
         s = state[index]
         out = outputs[index]
-        for column in range(N_OUTPUTS):
-            out[column] = 0.0
-        supply_pressure = supply_pressure_now(p, supply)
-        target = centered_voltage(commands[index], p[P_OFFSET], p[P_UMIN], p[P_UMAX])
+        target, lagging, supply_pressure, connections = begin_control_step(
+            p, s, out, commands[index], supply
+        )
         position = positions[index]
         velocity = velocities[index]
-        lagging = p[P_SPOOL_TAU] > 0.0
-        if not lagging:
-            s[S_SPOOL] = target
-        connections = valve_connections(p, s[S_SPOOL], supply_pressure)
         for _ in range(substeps):
-            if lagging:
-                s[S_SPOOL] = spool_update(p, s[S_SPOOL], target, h)
-                connections = valve_connections(p, s[S_SPOOL], supply_pressure)
+            connections = substep_connections(
+                p, s, target, lagging, supply_pressure, connections, h
+            )
             total_drawn += heun_pneumatics(p, s, position, velocity, h, connections, out)
             position += h * velocity
         s[S_BRISTLE] = advance_bristle(p, s[S_BRISTLE], velocity, control_step)
@@ -605,19 +627,14 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
         p = params[index]
         s = state[index]
         out = outputs[index]
-        for column in range(N_OUTPUTS):
-            out[column] = 0.0
-        supply_pressure = supply_pressure_now(p, supply)
-        target = centered_voltage(commands[index], p[P_OFFSET], p[P_UMIN], p[P_UMAX])
+        target, lagging, supply_pressure, connections = begin_control_step(
+            p, s, out, commands[index], supply
+        )
         spacer = p[P_SPACER] == 1.0
-        lagging = p[P_SPOOL_TAU] > 0.0
-        if not lagging:
-            s[S_SPOOL] = target
-        connections = valve_connections(p, s[S_SPOOL], supply_pressure)
         for _ in range(substeps):
-            if lagging:
-                s[S_SPOOL] = spool_update(p, s[S_SPOOL], target, h)
-                connections = valve_connections(p, s[S_SPOOL], supply_pressure)
+            connections = substep_connections(
+                p, s, target, lagging, supply_pressure, connections, h
+            )
             total_drawn += heun_pneumatics(p, s, s[S_POSITION], s[S_VELOCITY], h, connections, out)
             if not spacer:
                 rig_mechanics_substep(p, s, h, out)
