@@ -47,6 +47,17 @@ def test_step_run_writes_folder(tmp_path: Path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["steps"] == 2000
     assert summary["interrupted"] is False
+    recording = read_recording(out / "recording.csv")
+    # normal litres at DIN 1343 (0 °C, 1.01325 bar): rho_n = 101325 / (287 · 273.15)
+    normal_density = 101325.0 / (287.0 * 273.15)
+    assert np.allclose(
+        recording["air consumed [NL]"], recording["air consumed [kg]"] / normal_density * 1e3
+    )
+    assert recording["air consumed [kg]"][-1] > 0.0
+    assert np.allclose(
+        recording["net force [N]"],
+        recording["pneumatic force [N]"] - recording["friction force [N]"],
+    )
     # The piston ends extended against the stop: a 6 V command extends (cap port 2).
     assert summary["final position [m]"] == pytest.approx(1.75 * 0.0254, abs=1e-3)
     # The resolved parameters load back and reproduce the run's set.

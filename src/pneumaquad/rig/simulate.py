@@ -51,11 +51,14 @@ RIG_COLUMNS = (
     "supply mass flow [kg/s]",
     "air consumed [kg]",
     "tank pressure [Pa]",
+    "net force [N]",
+    "air consumed [NL]",
 )
 N_COLUMNS = len(RIG_COLUMNS)
 
-#: Normal density of air (DIN 1343: 273.15 K, 101325 Pa) with R = 287 J/(kg K) [kg/m^3].
-NORMAL_DENSITY = 101325.0 / (287.0 * 273.15)
+#: Normal conditions (DIN 1343) for normal litres: pressure [Pa] and temperature [K].
+NORMAL_PRESSURE = 101325.0
+NORMAL_TEMPERATURE = 273.15
 
 
 class ReferenceSolverError(ValueError):
@@ -87,6 +90,10 @@ def write_row(row, sample_time, command, reference, p, s, out, supply):
     row[19] = (
         supply[layout.SUPPLY_TANK_PRESSURE] if supply[layout.SUPPLY_MODEL] == 1.0 else math.nan
     )
+    # eq 4.1.11 with friction: what accelerates the piston besides gravity and the stops
+    row[20] = out[layout.O_PNEUMATIC_FORCE] - out[layout.O_FRICTION_FORCE]
+    normal_density = NORMAL_PRESSURE / (p[layout.P_R] * NORMAL_TEMPERATURE)
+    row[21] = s[layout.S_AIR_CONSUMED] / normal_density * 1000.0
 
 
 @compiled
@@ -145,9 +152,7 @@ ProgressCallback = Callable[[int, int], None]
 
 
 def _as_columns(rows: np.ndarray) -> dict[str, np.ndarray]:
-    columns = {name: rows[:, index].copy() for index, name in enumerate(RIG_COLUMNS)}
-    columns["air consumed [NL]"] = columns["air consumed [kg]"] / NORMAL_DENSITY * 1000.0
-    return columns
+    return {name: rows[:, index].copy() for index, name in enumerate(RIG_COLUMNS)}
 
 
 def _record(recorder: RunRecorder | None, block: np.ndarray) -> None:

@@ -1,0 +1,99 @@
+"""Optional physics: first-order spool lag and wall heat transfer, against closed forms."""
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import R_AIR, actuator_setup
+from pneumaquad import layout
+from pneumaquad.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.kernel import step_actuators
+
+DT = 1e-3
+
+
+def test_spool_lag_is_first_order() -> None:
+    """With spool_time_constant tau, the effective centered voltage after a command step
+    follows u·(1 - exp(-t/tau)) exactly (the kernel advances it with the exact update)."""
+    tau = 0.008
+    actuator = actuator_setup("crr-gamma", f'valve.spool_time_constant="{tau} s"')
+    row = pack_parameters(actuator)
+    params = row[np.newaxis, :]
+    state = initial_state(row, 0.02, 2e5, 2e5)[np.newaxis, :]
+    state[0, layout.S_SPOOL] = 0.0
+    supply = supply_state(actuator)
+    outputs = np.zeros((1, layout.N_OUTPUTS))
+    command = np.array([7.25])  # centered +2 V
+    spools = []
+    for _ in range(30):
+        step_actuators(
+            params, state, command, np.array([0.02]), np.array([0.0]), DT, 5, supply, outputs
+        )
+        spools.append(state[0, layout.S_SPOOL])
+    times = DT * np.arange(1, 31)
+    assert np.allclose(spools, 2.0 * (1.0 - np.exp(-times / tau)), rtol=1e-12, atol=1e-12)
+
+
+def test_spool_lag_off_follows_command_at_once() -> None:
+    actuator = actuator_setup("crr-gamma")
+    assert actuator.valve.spool_time_constant == 0.0
+    row = pack_parameters(actuator)
+    state = initial_state(row, 0.02, 2e5, 2e5)[np.newaxis, :]
+    outputs = np.zeros((1, layout.N_OUTPUTS))
+    step_actuators(
+        row[np.newaxis, :],
+        state,
+        np.array([3.0]),
+        np.array([0.02]),
+        np.array([0.0]),
+        DT,
+        5,
+        supply_state(actuator),
+        outputs,
+    )
+    assert state[0, layout.S_SPOOL] == pytest.approx(3.0 - 5.25)
+
+
+def test_heat_transfer_relaxes_closed_chamber_to_wall_temperature() -> None:
+    """A closed chamber of fixed volume: m·cv·dT/dt = h·A·(T_wall - T), cv = R/(k-1), so
+    T - T_wall decays with tau = m·R / ((k-1)·h·A)."""
+    h = 40.0
+    actuator = actuator_setup(
+        "crr-gamma",
+        'thermodynamics.model="heat_transfer"',
+        f'thermodynamics.heat_transfer_coefficient="{h} W/(m^2*K)"',
+        'thermodynamics.wall_temperature="298 K"',
+        'valve.model="simple"',
+        'valve.simple.leak_area="0 m^2"',
+    )
+    row = pack_parameters(actuator)
+    position = 0.02
+    hot = 360.0
+    state = initial_state(row, position, 3e5, 3e5, temperature=hot)[np.newaxis, :]
+    cylinder = actuator.cylinder
+    volume = cylinder.cap_area * (position + cylinder.cap_dead_length)
+    mass = state[0, layout.S_CAP_MASS]
+    wall = 0.5 * math.pi * cylinder.bore**2 + math.pi * cylinder.bore * volume / cylinder.cap_area
+    k = actuator.gas.heat_capacity_ratio
+    tau = mass * R_AIR / ((k - 1.0) * h * wall)
+    outputs = np.zeros((1, layout.N_OUTPUTS))
+    offset = np.array([actuator.valve.offset_voltage])  # closed: zero area at the offset
+    steps = round(tau / DT)
+    for _ in range(steps):
+        step_actuators(
+            row[np.newaxis, :],
+            state,
+            offset,
+            np.array([position]),
+            np.array([0.0]),
+            DT,
+            5,
+            supply_state(actuator),
+            outputs,
+        )
+    assert state[0, layout.S_CAP_MASS] == mass  # nothing flowed
+    temperature = outputs[0, layout.O_CAP_TEMPERATURE]
+    expected = 298.0 + (hot - 298.0) * math.exp(-steps * DT / tau)
+    assert temperature == pytest.approx(expected, rel=2e-3)
+    assert 298.0 < temperature < hot
