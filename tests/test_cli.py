@@ -1,8 +1,10 @@
 """Command line: runs write their folders, bad input exits 2 with a message, Ctrl-C keeps data."""
 
 import json
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -101,6 +103,25 @@ def test_bad_input_exits_2_without_traceback(tmp_path: Path, args, fragment: str
     assert not (tmp_path / "runs").exists() or not any((tmp_path / "runs").iterdir())
 
 
+@pytest.mark.parametrize(
+    "shape_args",
+    [
+        ("sine", "--duration", "2 s"),
+        ("chirp", "--duration", "2 s", "--frequency", "0.5 Hz", "--end-frequency", "2 Hz"),
+        ("step", "--levels", "0.5 in,1.2 in", "--dwell", "1 s"),
+        ("trapezoid", "--levels", "0.5 in,1.2 in", "--ramp", "0.3 s", "--dwell", "0.2 s"),
+    ],
+)
+def test_every_reference_shape_tracks(tmp_path: Path, shape_args: tuple[str, ...]) -> None:
+    out = tmp_path / "run"
+    done = run_cli("rig", "track", *shape_args, "-o", str(out), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    # a closed loop that works: the piston follows within a fraction of the stroke
+    assert summary["rmse [% stroke]"] < 15.0
+    assert summary["steps"] == 2000
+
+
 def test_interrupted_run_keeps_recording(tmp_path: Path) -> None:
     """Ctrl-C between chunks: the part that ran is recorded, flushed and readable."""
     setup = load_rig("thesis-rig")
@@ -166,3 +187,33 @@ def test_recorded_reference_rejects_non_monotonic_time(tmp_path: Path) -> None:
     path.write_text("t,x\n0,1\n0.2,2\n0.1,3\n")
     with pytest.raises(signals.RecordedReferenceError, match="not increasing"):
         signals.recorded_reference(path, "t", "x", 1.0, 1e-3)
+
+
+def test_ctrl_c_on_the_command_line_keeps_the_recording(tmp_path: Path) -> None:
+    """A real SIGINT to a running `rig track`: exit status 130, readable files, summary
+    marked interrupted."""
+    out = tmp_path / "long"
+    process = subprocess.Popen(
+        [*CLI, "rig", "track", "sine", "--duration", "3000 s", "-o", str(out)],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    csv = out / "recording.csv"
+    try:
+        for _ in range(600):  # wait (at most 60 s) until rows are being written
+            if csv.is_file() and csv.stat().st_size > 10_000:
+                break
+            time.sleep(0.1)
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    assert process.returncode == 130, stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["interrupted"] is True
+    recording = read_recording(out / "recording.parquet")
+    assert 0 < recording["time [s]"].size == summary["steps"] < 3_000_000
+    assert np.all(np.isfinite(recording["cap pressure [Pa]"]))
+    assert read_recording(out / "recording.csv")["time [s]"].size == summary["steps"]

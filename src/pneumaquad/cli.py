@@ -273,15 +273,15 @@ def build_reference(
         "sine": lambda: signals.sine(
             quantity(mean, "length", "--mean"),
             quantity(amplitude, "length", "--amplitude"),
-            quantity(frequency, "[1]/[time]", "--frequency"),
+            quantity(frequency, "frequency", "--frequency"),
             quantity(duration, "time", "--duration"),
             dt,
         ),
         "chirp": lambda: signals.chirp(
             quantity(mean, "length", "--mean"),
             quantity(amplitude, "length", "--amplitude"),
-            quantity(frequency, "[1]/[time]", "--frequency"),
-            quantity(end_frequency, "[1]/[time]", "--end-frequency"),
+            quantity(frequency, "frequency", "--frequency"),
+            quantity(end_frequency, "frequency", "--end-frequency"),
             quantity(duration, "time", "--duration"),
             dt,
         ),

@@ -74,6 +74,7 @@ KINDS: dict[str, Kind] = {
     "mass": Kind("kg", "a mass", "0.2 kg"),
     "force": Kind("N", "a force", "4.5 lbf"),
     "time": Kind("s", "a time", "1 ms"),
+    "frequency": Kind("Hz", "a frequency", "0.5 Hz"),
     "temperature": Kind("K", "a temperature", "298 K"),
     "voltage": Kind("V", "a voltage", "5.25 V"),
     "angle": Kind("rad", "an angle", "30 deg"),

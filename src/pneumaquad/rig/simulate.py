@@ -16,6 +16,7 @@ from scipy.integrate import solve_ivp
 from pneumaquad import layout
 from pneumaquad.actuator import supply_state
 from pneumaquad.control.pid import N_CONTROLLER_STATES, pid_update
+from pneumaquad.interruption import deferred_interrupt
 from pneumaquad.jit import compiled
 from pneumaquad.kernel import (
     end_stop_force,
@@ -156,7 +157,7 @@ def _as_columns(rows: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def _record(recorder: RunRecorder | None, block: np.ndarray) -> None:
-    if recorder is not None:
+    if recorder is not None and block.shape[0]:
         recorder.append(block)
 
 
@@ -207,29 +208,31 @@ def simulate_rig(
     done = 0
     interrupted = False
     started = time.perf_counter()
-    try:
-        while done < total:
-            count = min(chunk_steps, total - done)
-            run_rig_chunk(
-                params,
-                state,
-                supply,
-                gains,
-                controller,
-                closed_loop,
-                np.asarray(signal, dtype=float),
-                done,
-                count,
-                dt,
-                substeps,
-                rows[done : done + count],
-            )
-            _record(recorder, rows[done : done + count])
-            done += count
-            if progress is not None:
-                progress(done, total)
-    except KeyboardInterrupt:
-        interrupted = True
+    with deferred_interrupt() as stop:
+        try:
+            while done < total and not stop.requested:
+                count = min(chunk_steps, total - done)
+                run_rig_chunk(
+                    params,
+                    state,
+                    supply,
+                    gains,
+                    controller,
+                    closed_loop,
+                    np.asarray(signal, dtype=float),
+                    done,
+                    count,
+                    dt,
+                    substeps,
+                    rows[done : done + count],
+                )
+                _record(recorder, rows[done : done + count])
+                done += count
+                if progress is not None:
+                    progress(done, total)
+        except KeyboardInterrupt:
+            interrupted = True
+        interrupted = interrupted or stop.requested
     wall = time.perf_counter() - started
     return RigResult(_as_columns(rows[:done]), interrupted, wall, "fixed")
 
@@ -352,72 +355,76 @@ def simulate_rig_reference(
     interrupted = False
     started = time.perf_counter()
     spacer = p[layout.P_SPACER] == 1.0
-    try:
-        for k in range(total):
-            if closed_loop:
-                reference = float(signal[k])
-                command = pid_update(gains, controller, reference, y[layout.S_POSITION], dt)
-            else:
-                reference = math.nan
-                command = float(signal[k])
-            supply_pressure = supply_pressure_now(p, supply)
-            before = y.copy()
-            solution = solve_ivp(
-                _active_rates,
-                (0.0, dt),
-                y[active],
-                method=method,
-                rtol=rtol,
-                atol=atol[active],
-                jac=_active_jacobian,
-                args=(p, y, active, command, supply_pressure, scales),
-            )
-            if not solution.success:
-                raise ReferenceSolverError(
-                    f"solve_ivp failed at t = {k * dt:.4f} s: {solution.message}"
+    with deferred_interrupt() as stop:
+        try:
+            for k in range(total):
+                if stop.requested:
+                    break
+                if closed_loop:
+                    reference = float(signal[k])
+                    command = pid_update(gains, controller, reference, y[layout.S_POSITION], dt)
+                else:
+                    reference = math.nan
+                    command = float(signal[k])
+                supply_pressure = supply_pressure_now(p, supply)
+                before = y.copy()
+                solution = solve_ivp(
+                    _active_rates,
+                    (0.0, dt),
+                    y[active],
+                    method=method,
+                    rtol=rtol,
+                    atol=atol[active],
+                    jac=_active_jacobian,
+                    args=(p, y, active, command, supply_pressure, scales),
                 )
-            y[layout.S_AIR_CONSUMED] += _drawn_mass(
-                p, y, active, solution.t, solution.y, command, supply_pressure
-            )
-            y[active] = solution.y[:, -1]
-            drawn = y[layout.S_AIR_CONSUMED] - before[layout.S_AIR_CONSUMED]
-            supply[layout.SUPPLY_DRAWN_MASS] += drawn
-            if supply[layout.SUPPLY_MODEL] == 1.0:
-                supply[layout.SUPPLY_TANK_PRESSURE] -= (
-                    supply[layout.SUPPLY_GAS_CONSTANT]
-                    * supply[layout.SUPPLY_TANK_TEMPERATURE]
-                    * drawn
-                    / supply[layout.SUPPLY_TANK_VOLUME]
+                if not solution.success:
+                    raise ReferenceSolverError(
+                        f"solve_ivp failed at t = {k * dt:.4f} s: {solution.message}"
+                    )
+                y[layout.S_AIR_CONSUMED] += _drawn_mass(
+                    p, y, active, solution.t, solution.y, command, supply_pressure
                 )
-            out[:] = 0.0
-            out[layout.O_CAP_FLOW] = y[layout.S_CAP_MASS] - before[layout.S_CAP_MASS]
-            out[layout.O_ROD_FLOW] = y[layout.S_ROD_MASS] - before[layout.S_ROD_MASS]
-            out[layout.O_SUPPLY_DRAW] = drawn
-            finish_outputs(p, y, y[layout.S_POSITION], dt, out)
-            if spacer:
-                out[layout.O_END_STOP_FORCE] = -(
-                    out[layout.O_PNEUMATIC_FORCE] + p[layout.P_GRAVITY_FORCE]
-                )
-            else:
-                out[layout.O_FRICTION_FORCE] = friction_of(
-                    p, y[layout.S_VELOCITY], y[layout.S_BRISTLE]
-                )
-                out[layout.O_END_STOP_FORCE] = end_stop_force(
-                    y[layout.S_POSITION],
-                    y[layout.S_VELOCITY],
-                    p[layout.P_STROKE],
-                    p[layout.P_STOP_STIFFNESS],
-                    p[layout.P_STOP_DAMPING],
-                )
-            write_row(rows[k], (k + 1) * dt, command, reference, p, y, out, supply)
-            done = k + 1
-            if done - flushed >= 100 or done == total:
-                _record(recorder, rows[flushed:done])
-                flushed = done
-                if progress is not None:
-                    progress(done, total)
-    except KeyboardInterrupt:
-        interrupted = True
+                y[active] = solution.y[:, -1]
+                drawn = y[layout.S_AIR_CONSUMED] - before[layout.S_AIR_CONSUMED]
+                supply[layout.SUPPLY_DRAWN_MASS] += drawn
+                if supply[layout.SUPPLY_MODEL] == 1.0:
+                    supply[layout.SUPPLY_TANK_PRESSURE] -= (
+                        supply[layout.SUPPLY_GAS_CONSTANT]
+                        * supply[layout.SUPPLY_TANK_TEMPERATURE]
+                        * drawn
+                        / supply[layout.SUPPLY_TANK_VOLUME]
+                    )
+                out[:] = 0.0
+                out[layout.O_CAP_FLOW] = y[layout.S_CAP_MASS] - before[layout.S_CAP_MASS]
+                out[layout.O_ROD_FLOW] = y[layout.S_ROD_MASS] - before[layout.S_ROD_MASS]
+                out[layout.O_SUPPLY_DRAW] = drawn
+                finish_outputs(p, y, y[layout.S_POSITION], dt, out)
+                if spacer:
+                    out[layout.O_END_STOP_FORCE] = -(
+                        out[layout.O_PNEUMATIC_FORCE] + p[layout.P_GRAVITY_FORCE]
+                    )
+                else:
+                    out[layout.O_FRICTION_FORCE] = friction_of(
+                        p, y[layout.S_VELOCITY], y[layout.S_BRISTLE]
+                    )
+                    out[layout.O_END_STOP_FORCE] = end_stop_force(
+                        y[layout.S_POSITION],
+                        y[layout.S_VELOCITY],
+                        p[layout.P_STROKE],
+                        p[layout.P_STOP_STIFFNESS],
+                        p[layout.P_STOP_DAMPING],
+                    )
+                write_row(rows[k], (k + 1) * dt, command, reference, p, y, out, supply)
+                done = k + 1
+                if done - flushed >= 100 or done == total:
+                    _record(recorder, rows[flushed:done])
+                    flushed = done
+                    if progress is not None:
+                        progress(done, total)
+        except KeyboardInterrupt:
+            interrupted = True
+        interrupted = interrupted or stop.requested
         _record(recorder, rows[flushed:done])
     wall = time.perf_counter() - started
     return RigResult(_as_columns(rows[:done]), interrupted, wall, setup.simulation.integrator)
