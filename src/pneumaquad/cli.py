@@ -319,7 +319,7 @@ def valve_fit() -> None:
     """Run the thesis's App. B.2 equivalent-area fit and print both ports' polynomials."""
     from pneumaquad.valve_fit import thesis_port_polynomials
 
-    table = Table("port", "side", "coefficients [m^2/V^n], highest power first")
+    table = Table("port", "side", "coefficients (m^2/V^n), highest power first")
     for port in (1, 2):
         negative, positive = thesis_port_polynomials(port)
         table.add_row(str(port), "u_c <= 0", ", ".join(f"{c:.4g}" for c in negative))
