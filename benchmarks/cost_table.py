@@ -24,10 +24,10 @@ from _bench import machine_line, stats, table, write_json
 from pneumaquad import layout
 from pneumaquad.actuator import supply_state
 from pneumaquad.control.pid import N_CONTROLLER_STATES
-from pneumaquad.kernel import friction_of
 from pneumaquad.params import RigSetup, load_rig
 from pneumaquad.physics.friction import friction_damping
 from pneumaquad.physics.valve import input_pressure, polynomial_area, simple_valve_area
+from pneumaquad.pneumatics import friction_of
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 from pneumaquad.rig.signals import sine
 from pneumaquad.rig.simulate import N_COLUMNS, RIG_COLUMNS, run_rig_chunk

@@ -32,8 +32,9 @@ from numba import njit
 from _bench import Stats, machine_line, run_child, stats, table, write_json
 from pneumaquad import layout
 from pneumaquad.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.kernel import pneumatic_rates, port_flow, step_actuators, valve_connections
+from pneumaquad.kernel import step_actuators
 from pneumaquad.params import load_actuator, load_rig
+from pneumaquad.pneumatics import pneumatic_rates, port_flow, valve_connections
 
 TARGET_NS = 1000.0
 TARGET_COUNT = 12

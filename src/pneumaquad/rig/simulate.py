@@ -18,16 +18,11 @@ from pneumaquad.actuator import supply_state
 from pneumaquad.control.pid import N_CONTROLLER_STATES, pid_update
 from pneumaquad.interruption import deferred_interrupt
 from pneumaquad.jit import compiled
-from pneumaquad.kernel import (
-    end_stop_force,
-    finish_outputs,
-    friction_of,
-    rig_rates,
-    step_rigs,
-    supply_pressure_now,
-)
+from pneumaquad.kernel import rig_rates, step_rigs
 from pneumaquad.params.schema import RigSetup
+from pneumaquad.physics.force import end_stop_force
 from pneumaquad.physics.friction import FRICTION_LUGRE
+from pneumaquad.pneumatics import finish_outputs, friction_of, supply_pressure_now
 from pneumaquad.recording import RunRecorder
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 
