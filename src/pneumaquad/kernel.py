@@ -23,20 +23,17 @@ from pneumaquad.layout import (
     O_PNEUMATIC_FORCE,
     P_CAP_AREA,
     P_CV,
-    P_DAMPING,
     P_EXPONENT,
     P_FC,
     P_FRICTION_MODEL,
     P_FS,
     P_GRAVITY_FORCE,
-    P_KTANH,
     P_MOVING_MASS,
     P_OFFSET,
     P_PATM,
     P_ROD_AREA,
     P_ROD_SECTION,
     P_SIGMA0,
-    P_SIGMA1,
     P_SPACER,
     P_SPOOL_TAU,
     P_STOP_DAMPING,
@@ -60,7 +57,6 @@ from pneumaquad.physics.friction import (
     FRICTION_COULOMB,
     FRICTION_COULOMB_VISCOUS,
     FRICTION_LUGRE,
-    friction_damping,
     stribeck_curve,
 )
 from pneumaquad.physics.valve import (
@@ -72,6 +68,7 @@ from pneumaquad.pneumatics import (
     draw_from_tank,
     finish_outputs,
     friction_of,
+    friction_slope_of,
     heun_pneumatics,
     pneumatic_rates,
     substep_connections,
@@ -174,20 +171,7 @@ def rig_mechanics_substep(p, s, time_step, out):
     if stop != 0.0 and not resting_on_stop:
         stiffness = p[P_STOP_STIFFNESS]
         stop_damping = p[P_STOP_DAMPING]
-    damping = friction_damping(
-        model,
-        v,
-        p[P_FS],
-        p[P_FC],
-        p[P_CV],
-        p[P_VS],
-        p[P_EXPONENT],
-        p[P_KTANH],
-        p[P_DAMPING],
-        p[P_SIGMA0],
-        p[P_SIGMA1],
-        s[S_BRISTLE],
-    )
+    damping = friction_slope_of(p, v, s[S_BRISTLE])
     effective_mass = mass + h * (damping + stop_damping) + h * h * stiffness
     if dry_model:
         viscous = p[P_CV] if model == FRICTION_COULOMB_VISCOUS else 0.0

@@ -97,6 +97,7 @@ from pneumaquad.physics.chamber import (
 from pneumaquad.physics.force import piston_force
 from pneumaquad.physics.friction import (
     FRICTION_LUGRE,
+    friction_damping,
     friction_force,
     lugre_bristle_update,
     stribeck_curve,
@@ -378,6 +379,26 @@ def friction_of(p, velocity, bristle):
         p[P_DAMPING],
         p[P_SIGMA0],
         p[P_SIGMA1],
+    )
+
+
+@compiled
+def friction_slope_of(p, velocity, bristle):
+    """Dissipative slope dF/dv of actuator row p's friction law [N s/m] (see
+    :func:`pneumaquad.physics.friction.friction_damping`)."""
+    return friction_damping(
+        int(p[P_FRICTION_MODEL]),
+        velocity,
+        p[P_FS],
+        p[P_FC],
+        p[P_CV],
+        p[P_VS],
+        p[P_EXPONENT],
+        p[P_KTANH],
+        p[P_DAMPING],
+        p[P_SIGMA0],
+        p[P_SIGMA1],
+        bristle,
     )
 
 
