@@ -1,11 +1,13 @@
 """Object layer over the kernels: packing parameter objects and initial actuator states."""
 
-from collections.abc import Sequence
-
 import numpy as np
 
 from pneumaquad import layout
-from pneumaquad.params.schema import ActuatorParameters
+from pneumaquad.params.schema import (
+    ActuatorParameters,
+    ValveParameters,
+    ValvePortParameters,
+)
 from pneumaquad.physics.chamber import (
     THERMO_ADIABATIC,
     THERMO_HEAT_TRANSFER,
@@ -36,6 +38,13 @@ THERMO_CODES = {
 }
 VALVE_CODES = {"simple": layout.VALVE_SIMPLE, "underlapped": layout.VALVE_UNDERLAPPED}
 FLOW_CODES = {"orifice": layout.FLOW_ORIFICE, "iso6358": layout.FLOW_ISO6358}
+
+
+def chamber_ports(valve: ValveParameters) -> tuple[ValvePortParameters, ValvePortParameters]:
+    """The underlapped valve's (cap-side port, rod-side port), per ``valve.cap_port``."""
+    if valve.cap_port == 2:
+        return valve.port2, valve.port1
+    return valve.port1, valve.port2
 
 
 def pack_parameters(actuator: ActuatorParameters) -> np.ndarray:
@@ -90,9 +99,7 @@ def pack_parameters(actuator: ActuatorParameters) -> np.ndarray:
     row[layout.P_ISO_CONDUCTANCE] = simple.sonic_conductance
     row[layout.P_ISO_LEAK_CONDUCTANCE] = simple.leak_conductance
     row[layout.P_ISO_B] = simple.iso_critical_ratio
-    cap_port, rod_port = (
-        (valve.port2, valve.port1) if valve.cap_port == 2 else (valve.port1, valve.port2)
-    )
+    cap_port, rod_port = chamber_ports(valve)
     row[layout.P_CAP_POLY_NEG : layout.P_CAP_POLY_NEG + 5] = cap_port.area_negative
     row[layout.P_CAP_POLY_POS : layout.P_CAP_POLY_POS + 5] = cap_port.area_positive
     row[layout.P_ROD_POLY_NEG : layout.P_ROD_POLY_NEG + 5] = rod_port.area_negative
@@ -167,8 +174,3 @@ def supply_state(actuator: ActuatorParameters) -> np.ndarray:
         supply[layout.SUPPLY_TANK_VOLUME] = actuator.supply.tank_volume
         supply[layout.SUPPLY_TANK_TEMPERATURE] = actuator.supply.tank_temperature
     return supply
-
-
-def pack_many(actuators: Sequence[ActuatorParameters]) -> np.ndarray:
-    """Stack packed rows of several actuators into an (N, N_PARAMETERS) array."""
-    return np.vstack([pack_parameters(actuator) for actuator in actuators])

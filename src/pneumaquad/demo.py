@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from pneumaquad.actuator import chamber_ports
 from pneumaquad.params import load_rig
 from pneumaquad.plotting import plot_comparison
 from pneumaquad.rig import signals
@@ -163,6 +164,10 @@ def _open_loop_steps(folder: Path, report: DemoReport) -> None:
 def _spacer(folder: Path, report: DemoReport) -> None:
     figures: dict[str, Any] = {}
     recordings = {}
+    setup = load_rig("thesis-rig")
+    supply = setup.actuator.supply
+    valve = setup.actuator.valve
+    cap_port, rod_port = chamber_ports(valve)
     for volts in (5.55, 4.85):
         name = f"spacer-{volts:.2f}V".replace(".", "_")
         result, _ = _run(
@@ -174,12 +179,6 @@ def _spacer(folder: Path, report: DemoReport) -> None:
             f"fixed piston at {volts} V",
         )
         recording = result.recording
-        setup = load_rig("thesis-rig")
-        supply = setup.actuator.supply
-        valve = setup.actuator.valve
-        cap_port, rod_port = (
-            (valve.port2, valve.port1) if valve.cap_port == 2 else (valve.port1, valve.port2)
-        )
         centered = volts - valve.offset_voltage
         for label, port, column in (
             ("cap", cap_port, "cap pressure [Pa]"),

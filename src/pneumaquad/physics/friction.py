@@ -17,10 +17,6 @@ FRICTION_COULOMB_VISCOUS = 2
 FRICTION_STRIBECK_TANH = 3
 FRICTION_LUGRE = 4
 
-#: Models whose force law is a set-valued sign function. The fixed-step rig integrator
-#: resolves them with an exact stick/slip step; adaptive ODE solvers cannot.
-SET_VALUED_MODELS = (FRICTION_COULOMB, FRICTION_COULOMB_VISCOUS)
-
 
 @compiled
 def stribeck_curve(

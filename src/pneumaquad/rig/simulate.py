@@ -340,8 +340,9 @@ def simulate_rig_reference(
     controller = np.zeros(N_CONTROLLER_STATES)
     dt = setup.simulation.control_step
     rtol = setup.simulation.relative_tolerance
-    atol = setup.simulation.absolute_tolerance * _tolerance_scales(params)
-    scales = _tolerance_scales(params)[active]
+    state_scales = _tolerance_scales(params)
+    atol = setup.simulation.absolute_tolerance * state_scales
+    scales = state_scales[active]
     total = int(signal.shape[0])
     rows = np.zeros((total, N_COLUMNS))
     out = np.zeros(layout.N_OUTPUTS)
