@@ -53,7 +53,7 @@ def _rejects(overrides: list[str], *fragments: str, name: str = "thesis-rig") ->
 
 def test_list_parameter_sets() -> None:
     sets = list_parameter_sets()
-    assert sorted(sets) == sorted(SHIPPED)
+    assert sorted(sets) == sorted([*SHIPPED, "crr-quadruped"])
     assert all(isinstance(d, str) and d for d in sets.values())
 
 

@@ -14,8 +14,10 @@ from .loader import (
     list_parameter_sets,
     load_actuator,
     load_rig,
+    load_robot,
     resolved_parameters_toml,
 )
+from .robot_schema import JOINT_NAMES, LEG_NAMES, RobotParameters
 from .schema import (
     ActuatorParameters,
     ControllerParameters,
@@ -37,6 +39,8 @@ from .units import parse_quantity, ureg
 
 __all__ = [
     "DATA_DIR",
+    "JOINT_NAMES",
+    "LEG_NAMES",
     "MISSING",
     "ActuatorParameters",
     "ControllerParameters",
@@ -48,6 +52,7 @@ __all__ = [
     "Problem",
     "RigParameters",
     "RigSetup",
+    "RobotParameters",
     "SimpleValveParameters",
     "SimulationParameters",
     "SupplyParameters",
@@ -58,6 +63,7 @@ __all__ = [
     "list_parameter_sets",
     "load_actuator",
     "load_rig",
+    "load_robot",
     "orientation_to_angle",
     "parse_quantity",
     "resolved_parameters_toml",

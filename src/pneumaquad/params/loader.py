@@ -17,6 +17,7 @@ import tomli_w
 from pydantic import BaseModel, ValidationError
 
 from .errors import MISSING, ParameterError, Problem
+from .robot_schema import RobotParameters
 from .schema import ActuatorParameters, CrossFieldError, QuantityField, RigSetup
 from .units import GaugeError, QuantityError, convert_quantity
 
@@ -26,6 +27,7 @@ __all__ = [
     "list_parameter_sets",
     "load_actuator",
     "load_rig",
+    "load_robot",
     "resolved_parameters_toml",
 ]
 
@@ -284,6 +286,33 @@ def load_rig(name_or_path: str | os.PathLike[str], overrides: Iterable[str] = ()
     return _validate(RigSetup, data, raw, source)
 
 
+def load_robot(
+    name_or_path: str | os.PathLike[str], overrides: Iterable[str] = ()
+) -> RobotParameters:
+    """Load and validate a robot parameter file (``crr-quadruped`` or a path).
+
+    Parameters
+    ----------
+    name_or_path : str or path-like
+        A shipped set name or a path to a TOML file.
+    overrides : iterable of str
+        ``"section.key=value"`` items, e.g. ``"controller.alpha.gain_scale=0.75"``.
+
+    Returns
+    -------
+    RobotParameters
+        Validated parameters, SI (angles in rad). The actuator sets it names are loaded
+        with :func:`load_actuator`.
+
+    Raises
+    ------
+    ParameterError
+        Listing every problem found.
+    """
+    raw, source = _load_raw(name_or_path, overrides)
+    return _validate(RobotParameters, raw, raw, source)
+
+
 def _quantity(annotation: Any, metadata: Iterable[Any] = ()) -> QuantityField | None:
     for item in metadata:
         if isinstance(item, QuantityField):
@@ -298,24 +327,34 @@ def _quantity(annotation: Any, metadata: Iterable[Any] = ()) -> QuantityField | 
     return None
 
 
+def _to_toml_value(value: Any, annotation: Any, metadata: Iterable[Any] = ()) -> Any:
+    if isinstance(value, BaseModel):
+        return _to_toml_dict(value)
+    if isinstance(value, dict):
+        item_annotation = typing.get_args(annotation)[-1] if typing.get_args(annotation) else None
+        return {str(k): _to_toml_value(v, item_annotation) for k, v in value.items()}
+    if isinstance(value, tuple):
+        args = [a for a in typing.get_args(annotation) if a is not type(None)]
+        if len(args) == 1 and typing.get_origin(args[0]) is tuple:
+            args = list(typing.get_args(args[0]))
+        items = args if len(args) == len(value) else [None] * len(value)
+        return [_to_toml_value(v, a) for v, a in zip(value, items, strict=True)]
+    if (q := _quantity(annotation, metadata)) is not None:
+        return f"{value!r} {q.kind.si_unit}"
+    return value
+
+
 def _to_toml_dict(model: BaseModel) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for name, field in type(model).model_fields.items():
         value = getattr(model, name)
         if value is None:
             continue
-        if isinstance(value, BaseModel):
-            out[name] = _to_toml_dict(value)
-        elif isinstance(value, tuple):
-            out[name] = list(value)
-        elif (q := _quantity(field.annotation, field.metadata)) is not None:
-            out[name] = f"{value!r} {q.kind.si_unit}"
-        else:
-            out[name] = value
+        out[name] = _to_toml_value(value, field.annotation, field.metadata)
     return out
 
 
-def resolved_parameters_toml(params: RigSetup | ActuatorParameters) -> str:
+def resolved_parameters_toml(params: RigSetup | ActuatorParameters | RobotParameters) -> str:
     """Write validated parameters back as TOML with explicit SI units.
 
     Parameters

@@ -89,6 +89,9 @@ KINDS: dict[str, Kind] = {
     "proportional_gain": Kind("V/m", "a proportional gain", "300 V/m"),
     "integral_gain": Kind("V/(m*s)", "an integral gain", "100 V/(m*s)"),
     "derivative_gain": Kind("V*s/m", "a derivative gain", "3 V*s/m"),
+    "voltage_per_force": Kind("V/N", "a force feedback gain", "0.01 V/N"),
+    "density": Kind("kg/m^3", "a density", "2700 kg/m^3"),
+    "inertia": Kind("kg*m^2", "a moment of inertia", "0.01 kg*m^2"),
 }
 
 

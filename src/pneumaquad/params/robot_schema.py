@@ -1,0 +1,287 @@
+"""Validated robot parameter models: links, frames, linkages, controllers, simulation.
+
+A robot file (``crr-quadruped.toml``) describes the Compact Rescue Robot the way the
+thesis's SrLib listings do (App. C.2): capsule links with diameter, length and density,
+joint frames given in the parent and the child link, four leg mountings on the thorax,
+and the placement of the robot in the world. It adds what the thesis left to the reader:
+the cylinder linkage of each joint, the per-joint controllers and the simulation settings.
+All values are SI after validation (angles in rad).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from annotated_types import Ge, Gt, Le
+from pydantic import StrictInt
+from pydantic import model_validator as _model_validator
+
+from .schema import (
+    ControllerParameters,
+    CrossFieldError,
+    Damping,
+    Length,
+    Mass,
+    Meta,
+    Number,
+    QuantityField,
+    Time,
+    _Model,
+)
+
+__all__ = [
+    "JOINT_NAMES",
+    "LEG_NAMES",
+    "ContactParameters",
+    "CylinderMounting",
+    "EnvironmentParameters",
+    "Frame",
+    "JointControllerParameters",
+    "JointParameters",
+    "LinkParameters",
+    "LinkageParameters",
+    "RobotControllerParameters",
+    "RobotParameters",
+    "RobotSimulationParameters",
+    "TestbedParameters",
+]
+
+#: Joint names from the shoulder out (thesis 3.1, App. C.2.1).
+JOINT_NAMES = ("alpha", "beta", "gamma")
+#: Leg names; SrLib's L1, R1, L2, R2 (App. C.2.2).
+LEG_NAMES = ("front_left", "front_right", "rear_left", "rear_right")
+
+Angle = Annotated[float, QuantityField("angle")]
+Density = Annotated[float, QuantityField("density"), Gt(0)]
+Inertia = Annotated[float, QuantityField("inertia"), Gt(0)]
+
+
+class Frame(_Model):
+    """A rigid transform as SrLib writes it: ``EulerZYX(Vec3(a, b, c), Vec3(x, y, z))``.
+
+    ``rotation_zyx`` = (a, b, c) [rad] gives R = Rz(a)·Ry(b)·Rx(c); ``position`` [m].
+    """
+
+    rotation_zyx: tuple[Angle, Angle, Angle]
+    position: tuple[Length, Length, Length]
+
+
+class LinkParameters(_Model):
+    """A capsule link (SrLib ``SetDimension(diameter, length)``, ``UpdateInertia(density)``).
+
+    ``length`` is the cylindrical part along the link's z axis; the hemispherical caps
+    add ``diameter/2`` at each end. ``mass`` and ``inertia`` (principal moments about the
+    link frame axes [kg m^2]) override the density estimate (thesis 5.6.1, 6.6.2).
+    """
+
+    diameter: Annotated[Length, Gt(0)]
+    length: Annotated[Length, Ge(0)]
+    density: Density
+    collision_length: Annotated[Length, Ge(0)] | None = None
+    mass: Annotated[Mass, Gt(0)] | None = None
+    inertia: tuple[Inertia, Inertia, Inertia] | None = None
+    color: tuple[Number, Number, Number] = (0.7, 0.7, 0.7)
+
+
+class JointParameters(_Model):
+    """A revolute joint: its frame in the parent and in the child link, limits [rad]."""
+
+    parent_frame: Frame | None = None
+    child_frame: Frame
+    lower_limit: Angle
+    upper_limit: Angle
+    damping: Damping = 0.0
+
+    @_model_validator(mode="after")
+    def _limits(self) -> JointParameters:
+        if not self.lower_limit < self.upper_limit:
+            raise CrossFieldError(
+                [("upper_limit", self.upper_limit, "should be above lower_limit")]
+            )
+        return self
+
+
+class LegParameters(_Model):
+    """Link frames of one leg (App. C.2.1): coxa (two capsules welded), femur, tibia."""
+
+    coxa_weld_parent_frame: Frame
+    coxa_weld_child_frame: Frame
+    alpha: JointParameters
+    beta: JointParameters
+    gamma: JointParameters
+
+
+class LinkageParameters(_Model):
+    """Cylinder between two pivots of a joint (thesis Fig. 34–36, eq 5.2.1–5.2.6).
+
+    The barrel pivot sits on the parent link at ``parent_pivot_radius`` (l3) from the joint
+    axis, the rod-end pin on the child link at ``child_pivot_radius`` (l1); ``included
+    angle`` γ between the two at the axis is ``included_angle_at_zero + direction·θ``;
+    the pin-to-pin length is l2 + x with ``retracted_length`` = l2. When only the parent
+    radius is given, the other three are designed so that the stroke spans the joint's
+    range exactly with γ centred on 90° (:func:`pneumaquad.robot.linkage.design_linkage`).
+    """
+
+    parent_pivot_radius: Annotated[Length, Gt(0)]
+    child_pivot_radius: Annotated[Length, Gt(0)] | None = None
+    included_angle_at_zero: Angle | None = None
+    retracted_length: Annotated[Length, Gt(0)] | None = None
+    direction: Literal[1, -1]
+    axial_offset: Length = 0.0
+    moving_mass: Annotated[Mass, Ge(0)]
+
+    @_model_validator(mode="after")
+    def _all_or_none(self) -> LinkageParameters:
+        given = [
+            self.child_pivot_radius is not None,
+            self.included_angle_at_zero is not None,
+            self.retracted_length is not None,
+        ]
+        if any(given) and not all(given):
+            raise CrossFieldError(
+                [
+                    (
+                        "child_pivot_radius",
+                        self.child_pivot_radius,
+                        "child_pivot_radius, included_angle_at_zero and retracted_length "
+                        "should be given together (measured linkage) or all left out "
+                        "(designed from the stroke and the joint range)",
+                    )
+                ]
+            )
+        return self
+
+
+class CylinderMounting(_Model):
+    """Which actuator parameter set drives each joint type."""
+
+    alpha: str
+    beta: str
+    gamma: str
+
+
+class JointControllerParameters(ControllerParameters):
+    """PID on piston position (the robot's linear potentiometers, thesis 5.2) + extras.
+
+    ``gain_scale`` multiplies Kp, Ki and Kd (the thesis's alpha gain −25 %, 5.5.2.4);
+    ``force_feedback_gain`` [V/N] feeds back the net pneumatic force's deviation from its
+    low-pass mean (time constant ``force_feedback_time_constant``), adding damping from
+    the pressure sensors without a steady-state error.
+    """
+
+    gain_scale: Annotated[Number, Ge(0)] = 1.0
+    force_feedback_gain: Annotated[float, QuantityField("voltage_per_force"), Ge(0)] = 0.0
+    force_feedback_time_constant: Annotated[Time, Gt(0)] = 0.05
+
+
+class RobotControllerParameters(_Model):
+    """Joint controllers per joint type, and stance/swing gain scales for scheduling."""
+
+    alpha: JointControllerParameters
+    beta: JointControllerParameters
+    gamma: JointControllerParameters
+    stance_gain_scale: Annotated[Number, Ge(0)] = 1.0
+    swing_gain_scale: Annotated[Number, Ge(0)] = 1.0
+
+
+class ContactParameters(_Model):
+    """Friction coefficients (SrLib ``SetFriction``, App. C.2) and MuJoCo contact softness."""
+
+    ground_friction: Annotated[Number, Ge(0)]
+    foot_friction: Annotated[Number, Ge(0)]
+    body_friction: Annotated[Number, Ge(0)] = 1.0
+    time_constant: Annotated[Time, Gt(0)] = 0.005
+    damping_ratio: Annotated[Number, Gt(0)] = 1.0
+
+
+class EnvironmentParameters(_Model):
+    """Obstacles: block, ramp (App. C.2.3: 1.2 × 1.2 × 0.019 m), rough-terrain field."""
+
+    block_size: tuple[Length, Length, Length]
+    block_position: tuple[Length, Length, Length]
+    ramp_size: tuple[Length, Length, Length]
+    ramp_position: tuple[Length, Length, Length]
+    ramp_slope: Angle
+    rough_size: tuple[Length, Length]
+    rough_position: tuple[Length, Length]
+    rough_max_height: Annotated[Length, Gt(0)]
+    rough_cell: Annotated[Length, Gt(0)]
+    rough_fill: Annotated[Number, Ge(0), Le(1)] = 0.5
+
+
+class TestbedParameters(_Model):
+    """Two-legged testbed (thesis 3.1.2): the rear of the body rolls on passive wheels.
+
+    Two wheels on one axle under the rear end of the thorax, free to spin; the axle hangs
+    ``axle_drop`` below the thorax axis.
+    """
+
+    wheel_radius: Annotated[Length, Gt(0)]
+    wheel_width: Annotated[Length, Gt(0)]
+    wheel_mass: Annotated[Mass, Gt(0)]
+    axle_drop: Annotated[Length, Ge(0)]
+    track_width: Annotated[Length, Gt(0)]
+
+
+class RobotSimulationParameters(_Model):
+    """Coupled-simulation settings.
+
+    ``control_step`` [s] is the period of the controllers and of the pneumatic kernel
+    (``substeps`` Heun steps inside); MuJoCo takes ``physics_steps`` steps per control
+    step. ``seal_friction`` chooses where cylinder friction lives: ``"mujoco"`` (dry
+    friction in the constraint solver, Stribeck breakaway updated each step) or
+    ``"actuator"`` (the actuator file's force law, applied through the motor).
+    """
+
+    control_step: Annotated[Time, Gt(0)]
+    substeps: Annotated[StrictInt, Ge(1)]
+    physics_steps: Annotated[StrictInt, Ge(1)] = 1
+    integrator: Literal["implicitfast", "implicit", "euler", "rk4"] = "implicitfast"
+    seal_friction: Literal["mujoco", "actuator"] = "mujoco"
+    noslip_iterations: Annotated[StrictInt, Ge(0)] = 0
+    solver_iterations: Annotated[StrictInt, Ge(1)] = 50
+    recording_every: Annotated[StrictInt, Ge(1)] = 10
+
+
+class RobotParameters(_Model):
+    """A complete robot parameter set (see module docstring)."""
+
+    meta: Meta
+    actuators: CylinderMounting
+    thorax: LinkParameters
+    coxa1: LinkParameters
+    coxa2: LinkParameters
+    femur: LinkParameters
+    tibia: LinkParameters
+    leg: LegParameters
+    mounts: dict[Literal[LEG_NAMES], Frame]  # type: ignore[valid-type]
+    placement: Frame
+    linkages: dict[Literal[JOINT_NAMES], LinkageParameters]  # type: ignore[valid-type]
+    contact: ContactParameters
+    environment: EnvironmentParameters
+    controller: RobotControllerParameters
+    simulation: RobotSimulationParameters
+    testbed: TestbedParameters
+
+    @_model_validator(mode="after")
+    def _complete(self) -> RobotParameters:
+        problems = []
+        for name in LEG_NAMES:
+            if name not in self.mounts:
+                problems.append((f"mounts.{name}", None, "is missing (one frame per leg)"))
+        for name in JOINT_NAMES:
+            if name not in self.linkages:
+                problems.append((f"linkages.{name}", None, "is missing (one per joint)"))
+        for name in JOINT_NAMES:
+            joint = getattr(self.leg, name)
+            if name != "alpha" and joint.parent_frame is None:
+                problems.append((f"leg.{name}.parent_frame", None, "is required"))
+            span = joint.upper_limit - joint.lower_limit
+            if span >= math.pi:
+                problems.append(
+                    (f"leg.{name}.upper_limit", joint.upper_limit, "range should be < 180°")
+                )
+        if problems:
+            raise CrossFieldError(problems)
+        return self

@@ -1,0 +1,1 @@
+"""The quadruped robot: model, kinematics, coupled simulation."""

@@ -1,0 +1,158 @@
+"""Compiled control step of the robot: controllers, pneumatic kernel, forces to MuJoCo.
+
+One call per control step does, for all cylinders at once: read piston positions and
+velocities from MuJoCo's tendon lengths and velocities, turn joint-angle references into
+piston references through the linkage (eq 5.2.1-5.2.6), run the PID controllers (valve
+voltage out), advance every actuator with :func:`pneumaquad.kernel.step_actuators`, and
+write the cylinder forces into ``data.ctrl`` and the seal friction into the model.
+No Python loop over actuators.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pneumaquad.control.pid import C_INTEGRAL, G_KD, G_KI, G_KP, N_GAINS, pid_update
+from pneumaquad.jit import compiled
+from pneumaquad.kernel import step_actuators
+from pneumaquad.layout import (
+    O_FRICTION_FORCE,
+    O_PNEUMATIC_FORCE,
+    P_OFFSET,
+    P_STROKE,
+    S_BRISTLE,
+)
+from pneumaquad.pneumatics import friction_slope_of
+
+# Per-joint linkage rows: l1, l3, γ0, l2, direction (see pneumaquad.robot.linkage).
+L_CHILD = 0
+L_PARENT = 1
+L_GAMMA_ZERO = 2
+L_RETRACTED = 3
+L_DIRECTION = 4
+N_LINKAGE = 5
+
+# Per-joint seal friction rows for MuJoCo's dry friction: Fs, Fc, vS, i, viscous.
+F_STATIC = 0
+F_COULOMB = 1
+F_STRIBECK_VELOCITY = 2
+F_EXPONENT = 3
+F_VISCOUS = 4
+N_SEAL = 5
+
+# Per-joint extra controller settings.
+X_FORCE_GAIN = 0  # force feedback gain [V/N]
+X_FORCE_TAU = 1  # low-pass time constant of the force mean [s]
+X_COMMANDED = 2  # 1: closed loop, 0: valve held at its offset, 2: open loop voltage
+N_EXTRA = 3
+
+MODE_UNCOMMANDED = 0.0
+MODE_CLOSED_LOOP = 1.0
+MODE_OPEN_LOOP = 2.0
+
+
+@compiled
+def piston_from_angle(linkage_row, angle: float) -> float:
+    """Piston extension x [m] for joint angle θ [rad] (eq 5.2.1, 5.2.3, 5.2.5)."""
+    l1 = linkage_row[L_CHILD]
+    l3 = linkage_row[L_PARENT]
+    gamma = linkage_row[L_GAMMA_ZERO] + linkage_row[L_DIRECTION] * angle
+    return math.sqrt(l1 * l1 + l3 * l3 - 2.0 * l1 * l3 * math.cos(gamma)) - linkage_row[L_RETRACTED]
+
+
+@compiled
+def robot_control_step(
+    tendon_length,
+    tendon_velocity,
+    tendon_ids,
+    actuator_ids,
+    control,
+    tendon_frictionloss,
+    tendon_damping,
+    linkage,
+    seal,
+    mujoco_friction: bool,
+    params,
+    state,
+    supply,
+    outputs,
+    gains,
+    gain_scale,
+    extra,
+    pid_state,
+    force_mean,
+    reference_angles,
+    open_loop_voltage,
+    commands,
+    positions,
+    velocities,
+    reference_positions,
+    control_step: float,
+    substeps: int,
+):
+    """Advance controllers and actuators by one control step and set MuJoCo's inputs.
+
+    Arrays are per cylinder (index i) unless noted; MuJoCo arrays are indexed through
+    ``tendon_ids`` / ``actuator_ids``. ``commands``, ``positions``, ``velocities`` and
+    ``reference_positions`` are filled for recording. ``gain_scale`` multiplies the PID
+    gains (the gain-scheduling hook writes it). With ``mujoco_friction`` the seal
+    friction becomes the tendon's dry friction (Stribeck breakaway at the current speed)
+    and viscous damping; otherwise the actuator file's force law is applied through the
+    motor, its slope as tendon damping so MuJoCo's implicit integrator treats it stably.
+    """
+    count = params.shape[0]
+    scaled = np.empty(N_GAINS)
+    for i in range(count):
+        tendon = tendon_ids[i]
+        stroke = params[i, P_STROKE]
+        x = tendon_length[tendon] - linkage[i, L_RETRACTED]
+        positions[i] = min(max(x, 0.0), stroke)
+        velocities[i] = tendon_velocity[tendon]
+        mode = extra[i, X_COMMANDED]
+        if mode == MODE_CLOSED_LOOP:
+            target = piston_from_angle(linkage[i], reference_angles[i])
+            reference_positions[i] = min(max(target, 0.0), stroke)
+            for k in range(N_GAINS):
+                scaled[k] = gains[i, k]
+            scaled[G_KP] *= gain_scale[i]
+            scaled[G_KI] *= gain_scale[i]
+            scaled[G_KD] *= gain_scale[i]
+            if scaled[G_KI] == 0.0:
+                pid_state[i, C_INTEGRAL] = 0.0
+            voltage = pid_update(
+                scaled, pid_state[i], reference_positions[i], positions[i], control_step
+            )
+            force_gain = extra[i, X_FORCE_GAIN]
+            if force_gain > 0.0:
+                deviation = outputs[i, O_PNEUMATIC_FORCE] - force_mean[i]
+                voltage -= force_gain * deviation
+                voltage = min(max(voltage, scaled[6]), scaled[7])
+            commands[i] = voltage
+        elif mode == MODE_OPEN_LOOP:
+            reference_positions[i] = positions[i]
+            commands[i] = open_loop_voltage[i]
+        else:
+            reference_positions[i] = positions[i]
+            commands[i] = params[i, P_OFFSET]
+    step_actuators(
+        params, state, commands, positions, velocities, control_step, substeps, supply, outputs
+    )
+    for i in range(count):
+        tendon = tendon_ids[i]
+        force = outputs[i, O_PNEUMATIC_FORCE]
+        tau = extra[i, X_FORCE_TAU]
+        force_mean[i] += control_step / (tau + control_step) * (force - force_mean[i])
+        v = velocities[i]
+        if mujoco_friction:
+            breakaway = seal[i, F_COULOMB] + (seal[i, F_STATIC] - seal[i, F_COULOMB]) * math.exp(
+                -((abs(v) / seal[i, F_STRIBECK_VELOCITY]) ** seal[i, F_EXPONENT])
+            )
+            tendon_frictionloss[tendon] = breakaway
+            tendon_damping[tendon] = seal[i, F_VISCOUS]
+        else:
+            slope = max(friction_slope_of(params[i], v, state[i, S_BRISTLE]), 0.0)
+            tendon_damping[tendon] = slope
+            force += slope * v - outputs[i, O_FRICTION_FORCE]
+        control[actuator_ids[i]] = force

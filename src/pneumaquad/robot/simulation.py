@@ -1,0 +1,307 @@
+"""The coupled simulation: a MuJoCo robot whose joints are driven by pneumatic cylinders.
+
+:class:`RobotSimulation` holds the MuJoCo model and data, the packed actuator arrays of
+all cylinders and their controllers. Each control step (default 1 ms) reads every piston
+position and velocity from the cylinder tendons, advances all controllers and actuators
+in one compiled call (the pneumatic kernel sub-stepped inside), applies the cylinder
+forces and steps MuJoCo. Chunks of steps run inside compiled code
+(:mod:`pneumaquad.robot.stepping`); Python sees the state between chunks, for
+recording, gain scheduling and progress.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+
+from pneumaquad.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.control.pid import N_CONTROLLER_STATES, pid_gains
+from pneumaquad.layout import (
+    N_OUTPUTS,
+    N_STATES,
+    O_PNEUMATIC_FORCE,
+    P_OFFSET,
+    P_PATM,
+    P_PE,
+    P_PS,
+    P_STROKE,
+    S_AIR_CONSUMED,
+    S_CAP_PRESSURE,
+    S_ROD_PRESSURE,
+    SUPPLY_DRAWN_MASS,
+    SUPPLY_MODEL,
+    SUPPLY_TANK_PRESSURE,
+)
+from pneumaquad.params import ActuatorParameters
+from pneumaquad.params.robot_schema import JointControllerParameters
+
+from .builder import RobotModel
+from .coupling import (
+    F_COULOMB,
+    F_EXPONENT,
+    F_STATIC,
+    F_STRIBECK_VELOCITY,
+    F_VISCOUS,
+    L_CHILD,
+    L_DIRECTION,
+    L_GAMMA_ZERO,
+    L_PARENT,
+    L_RETRACTED,
+    MODE_CLOSED_LOOP,
+    MODE_OPEN_LOOP,
+    MODE_UNCOMMANDED,
+    N_EXTRA,
+    N_LINKAGE,
+    N_SEAL,
+    X_COMMANDED,
+    X_FORCE_GAIN,
+    X_FORCE_TAU,
+)
+from .stepping import advance_chunk
+
+__all__ = ["RobotSimulation", "seal_friction_row"]
+
+GainSchedule = Callable[["RobotSimulation"], np.ndarray]
+
+_NO_TABLE = np.zeros((0, 1))
+
+
+def seal_friction_row(actuator: ActuatorParameters) -> np.ndarray:
+    """Seal friction for MuJoCo's dry-friction constraint: Fs, Fc [N], vS [m/s], i, b [N s/m].
+
+    The Stribeck-tanh and LuGre models give their Stribeck curve (eq 4.2.6) as the
+    breakaway force and Cv as viscous damping; Coulomb(-viscous) give Fc (Fs from rest);
+    the viscous model gives damping only (thesis 4.2.2).
+    """
+    f = actuator.friction
+    row = np.zeros(N_SEAL)
+    row[F_STRIBECK_VELOCITY] = f.stribeck_velocity
+    row[F_EXPONENT] = f.stribeck_exponent
+    if f.model in ("stribeck_tanh", "lugre"):
+        row[F_STATIC], row[F_COULOMB], row[F_VISCOUS] = (
+            f.static_force, f.coulomb_force, f.viscous_coefficient,
+        )
+    elif f.model == "coulomb":
+        row[F_STATIC] = row[F_COULOMB] = f.coulomb_force
+    elif f.model == "coulomb_viscous":
+        row[F_STATIC], row[F_COULOMB], row[F_VISCOUS] = (
+            f.static_force, f.coulomb_force, f.viscous_coefficient,
+        )
+        row[F_STRIBECK_VELOCITY] = 1e-4
+    else:
+        row[F_VISCOUS] = f.damping_coefficient
+    return row
+
+
+def _gains(controller: JointControllerParameters, actuator: ActuatorParameters) -> np.ndarray:
+    return pid_gains(
+        controller.proportional_gain,
+        controller.integral_gain,
+        controller.derivative_gain,
+        controller.derivative_filter_time_constant,
+        controller.integral_limit,
+        actuator.valve.offset_voltage,
+        actuator.valve.min_voltage,
+        actuator.valve.max_voltage,
+    )
+
+
+class RobotSimulation:
+    """A robot model coupled to its cylinders, valves and joint controllers.
+
+    Parameters
+    ----------
+    robot : RobotModel
+        From :func:`pneumaquad.robot.build_robot`.
+    supply : {"ideal", "tank"}, optional
+        Override of the actuator files' supply model (all cylinders share one supply).
+    """
+
+    def __init__(self, robot: RobotModel, supply: str | None = None) -> None:
+        self.robot = robot
+        self.model = robot.model
+        self.data = mujoco.MjData(robot.model)
+        p = robot.parameters
+        n = robot.joint_count
+        self.control_step = p.simulation.control_step
+        self.substeps = p.simulation.substeps
+        self.physics_steps = p.simulation.physics_steps
+        self.mujoco_friction = p.simulation.seal_friction == "mujoco"
+        actuators = [robot.actuators[t] for t in robot.joint_types]
+        self.params = np.array([pack_parameters(a) for a in actuators])
+        first = robot.actuators["alpha"]
+        if supply is not None and supply != first.supply.model:
+            first = first.model_copy(update={"supply": first.supply.model_copy(
+                update={"model": supply})})
+        self.supply = supply_state(first)
+        self.outputs = np.zeros((n, N_OUTPUTS))
+        self.linkage = np.zeros((n, N_LINKAGE))
+        for i, joint_type in enumerate(robot.joint_types):
+            link = robot.linkages[joint_type]
+            self.linkage[i, L_CHILD] = link.child_pivot_radius
+            self.linkage[i, L_PARENT] = link.parent_pivot_radius
+            self.linkage[i, L_GAMMA_ZERO] = link.included_angle_at_zero
+            self.linkage[i, L_RETRACTED] = link.retracted_length
+            self.linkage[i, L_DIRECTION] = link.direction
+        self.seal = np.array([seal_friction_row(a) for a in actuators])
+        controllers = [getattr(p.controller, t) for t in robot.joint_types]
+        self.gains = np.array([_gains(c, a) for c, a in zip(controllers, actuators, strict=True)])
+        self.base_gain_scale = np.array([c.gain_scale for c in controllers])
+        self.gain_scale = self.base_gain_scale.copy()
+        self.extra = np.zeros((n, N_EXTRA))
+        self.extra[:, X_FORCE_GAIN] = [c.force_feedback_gain for c in controllers]
+        self.extra[:, X_FORCE_TAU] = [c.force_feedback_time_constant for c in controllers]
+        self.extra[:, X_COMMANDED] = MODE_UNCOMMANDED
+        self.pid_state = np.zeros((n, N_CONTROLLER_STATES))
+        self.force_mean = np.zeros(n)
+        self.reference_angles = np.zeros(n)
+        self.open_loop_voltage = self.params[:, P_OFFSET].copy()
+        self.commands = self.params[:, P_OFFSET].copy()
+        self.positions = np.zeros(n)
+        self.velocities = np.zeros(n)
+        self.reference_positions = np.zeros(n)
+        self.state = np.zeros((n, N_STATES))
+        self.gain_schedule: GainSchedule | None = None
+        self.steps_taken = 0
+        self.set_pose(np.clip(np.zeros(n), robot.lower_limits(), robot.upper_limits()))
+
+    # --- state -----------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """Simulated time [s]."""
+        return float(self.data.time)
+
+    def joint_angles(self) -> np.ndarray:
+        """Joint angles [rad] of the simulated joints."""
+        return self.data.qpos[self.robot.qpos_address].copy()
+
+    def joint_velocities(self) -> np.ndarray:
+        """Joint angular velocities [rad/s]."""
+        return self.data.qvel[self.robot.dof_address].copy()
+
+    def foot_positions(self) -> np.ndarray:
+        """World positions of the feet [m], (legs, 3)."""
+        return self.data.site_xpos[self.robot.foot_site_id].copy()
+
+    def air_consumed(self) -> float:
+        """Air drawn from the supply since the start [kg]."""
+        return float(self.supply[SUPPLY_DRAWN_MASS])
+
+    def air_consumed_per_joint(self) -> np.ndarray:
+        """Air drawn by each cylinder since the start [kg]."""
+        return self.state[:, S_AIR_CONSUMED].copy()
+
+    def supply_pressure(self) -> float:
+        """Tank pressure (tank supply) or regulated supply pressure [Pa]."""
+        if self.supply[SUPPLY_MODEL] == 1.0:
+            return float(self.supply[SUPPLY_TANK_PRESSURE])
+        return float(self.params[0, P_PS])
+
+    def set_pose(
+        self,
+        joint_angles: np.ndarray,
+        thorax_position: np.ndarray | None = None,
+        thorax_quaternion: np.ndarray | None = None,
+        chamber_pressure: float | None = None,
+    ) -> None:
+        """Place the robot at rest and reset actuators and controllers.
+
+        Parameters
+        ----------
+        joint_angles : ndarray
+            Angles [rad] of the simulated joints (clipped to their limits).
+        thorax_position, thorax_quaternion : ndarray, optional
+            Free-floating thorax pose (world [m], quaternion w-x-y-z).
+        chamber_pressure : float, optional
+            Absolute pressure of every chamber [Pa]; midway between supply and exhaust
+            by default (a valve at rest near its centre).
+        """
+        robot = self.robot
+        angles = np.clip(joint_angles, robot.lower_limits(), robot.upper_limits())
+        self.data.qvel[:] = 0.0
+        self.data.qpos[robot.qpos_address] = angles
+        if robot.free:
+            if thorax_position is not None:
+                self.data.qpos[0:3] = thorax_position
+            if thorax_quaternion is not None:
+                self.data.qpos[3:7] = thorax_quaternion
+        mujoco.mj_forward(self.model, self.data)
+        lengths = self.data.ten_length[robot.tendon_id]
+        for i in range(robot.joint_count):
+            row = self.params[i]
+            position = min(max(lengths[i] - self.linkage[i, L_RETRACTED], 0.0), row[P_STROKE])
+            pressure = chamber_pressure
+            if pressure is None:
+                pressure = 0.5 * (row[P_PS] + row[P_PE])
+            self.state[i] = initial_state(row, position, pressure, pressure)
+        self.pid_state[:] = 0.0
+        self.outputs[:] = 0.0
+        self.force_mean[:] = 0.0
+        self.reference_angles[:] = angles
+
+    # --- commands --------------------------------------------------------------------
+    def command_angles(self, angles: np.ndarray, joints: np.ndarray | None = None) -> None:
+        """Closed-loop position control of ``joints`` (all by default) to ``angles`` [rad]."""
+        index = slice(None) if joints is None else joints
+        self.reference_angles[index] = angles
+        self.extra[index, X_COMMANDED] = MODE_CLOSED_LOOP
+
+    def command_voltages(self, voltages: np.ndarray, joints: np.ndarray | None = None) -> None:
+        """Open-loop valve voltages [V] for ``joints`` (all by default)."""
+        index = slice(None) if joints is None else joints
+        self.open_loop_voltage[index] = voltages
+        self.extra[index, X_COMMANDED] = MODE_OPEN_LOOP
+
+    def release(self, joints: np.ndarray | None = None) -> None:
+        """Hold the valves of ``joints`` at their offset (closed centre), uncommanded."""
+        index = slice(None) if joints is None else joints
+        self.extra[index, X_COMMANDED] = MODE_UNCOMMANDED
+
+    def control_modes(self) -> np.ndarray:
+        """Per joint: 0 uncommanded, 1 closed loop, 2 open loop."""
+        return self.extra[:, X_COMMANDED].copy()
+
+    # --- stepping --------------------------------------------------------------------
+    def step(self, count: int = 1, reference_table: np.ndarray | None = None,
+             reference_start: int = 0) -> None:
+        """Advance ``count`` control steps.
+
+        Parameters
+        ----------
+        count : int
+            Control steps.
+        reference_table : ndarray (T, joints), optional
+            Joint-angle references [rad] per control step; row ``reference_start + k`` is
+            used at step k (the last row after the end).
+        reference_start : int
+            First row used.
+        """
+        if self.gain_schedule is not None:
+            self.gain_scale[:] = self.base_gain_scale * self.gain_schedule(self)
+        table = _NO_TABLE if reference_table is None else reference_table
+        d = self.data
+        advance_chunk(
+            count, self.model._address, d._address, self.physics_steps, table, reference_start,
+            d.ten_length, d.ten_velocity, self.robot.tendon_id, self.robot.actuator_id, d.ctrl,
+            self.model.tendon_frictionloss, self.model.tendon_damping, self.linkage, self.seal,
+            self.mujoco_friction, self.params, self.state, self.supply, self.outputs,
+            self.gains, self.gain_scale, self.extra, self.pid_state, self.force_mean,
+            self.reference_angles, self.open_loop_voltage, self.commands, self.positions,
+            self.velocities, self.reference_positions, self.control_step, self.substeps,
+        )
+        self.steps_taken += count
+
+    # --- readouts --------------------------------------------------------------------
+    def chamber_pressures(self) -> np.ndarray:
+        """(joints, 2) cap and rod pressures [Pa], absolute."""
+        return self.state[:, [S_CAP_PRESSURE, S_ROD_PRESSURE]].copy()
+
+    def cylinder_forces(self) -> np.ndarray:
+        """Net pneumatic force of each cylinder [N] (eq 4.1.11 without friction)."""
+        return self.outputs[:, O_PNEUMATIC_FORCE].copy()
+
+    def atmospheric_pressure(self) -> float:
+        """Atmospheric pressure [Pa] of the actuator files."""
+        return float(self.params[0, P_PATM])
