@@ -29,6 +29,7 @@ from pneumaquad.rig import signals
 from pneumaquad.rig.experiment import run_rig_experiment
 from pneumaquad.rig.signals import RecordedReferenceError
 from pneumaquad.rig.simulate import ReferenceSolverError
+from pneumaquad.robot.video import VideoError
 
 USER_ERRORS = (ParameterError, RecordedReferenceError, ReferenceSolverError)
 
@@ -341,11 +342,22 @@ def demo(
     console.print(f"report: [bold]{report}[/bold]")
 
 
+def _register_robot_commands() -> None:
+    from pneumaquad.cli_robot import leg_app, robot_app, video_command
+
+    app.add_typer(leg_app, name="leg")
+    app.add_typer(robot_app, name="robot")
+    app.command("video")(video_command)
+
+
+_register_robot_commands()
+
+
 def main() -> None:
     """Entry point: run the app; user errors print a message and exit with status 2."""
     try:
         app()
-    except USER_ERRORS as error:
+    except (*USER_ERRORS, VideoError) as error:
         console.print("error:", style="bold red", end=" ")
         console.print(str(error), highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)

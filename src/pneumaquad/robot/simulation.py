@@ -59,7 +59,7 @@ from .coupling import (
     X_FORCE_GAIN,
     X_FORCE_TAU,
 )
-from .stepping import advance_chunk
+from .stepping import MJ_STEP_ADDRESS, advance_chunk
 
 __all__ = ["RobotSimulation", "seal_friction_row"]
 
@@ -136,6 +136,7 @@ class RobotSimulation:
             first = first.model_copy(update={"supply": first.supply.model_copy(
                 update={"model": supply})})
         self.supply = supply_state(first)
+        self._initial_supply = self.supply.copy()
         self.outputs = np.zeros((n, N_OUTPUTS))
         self.linkage = np.zeros((n, N_LINKAGE))
         for i, joint_type in enumerate(robot.joint_types):
@@ -220,8 +221,10 @@ class RobotSimulation:
         """
         robot = self.robot
         angles = np.clip(joint_angles, robot.lower_limits(), robot.upper_limits())
-        self.data.qvel[:] = 0.0
+        mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[robot.qpos_address] = angles
+        self.supply[:] = self._initial_supply
+        self.steps_taken = 0
         if robot.free:
             if thorax_position is not None:
                 self.data.qpos[0:3] = thorax_position
@@ -283,7 +286,8 @@ class RobotSimulation:
         table = _NO_TABLE if reference_table is None else reference_table
         d = self.data
         advance_chunk(
-            count, self.model._address, d._address, self.physics_steps, table, reference_start,
+            MJ_STEP_ADDRESS, count, self.model._address, d._address, self.physics_steps, table,
+            reference_start,
             d.ten_length, d.ten_velocity, self.robot.tendon_id, self.robot.actuator_id, d.ctrl,
             self.model.tendon_frictionloss, self.model.tendon_damping, self.linkage, self.seal,
             self.mujoco_friction, self.params, self.state, self.supply, self.outputs,

@@ -1,11 +1,11 @@
 """The stepping loop of the coupled simulation, compiled, with MuJoCo called from inside.
 
-``mj_step`` is taken from MuJoCo's shared library through ``ctypes`` and called from a
+``mj_step`` is looked up in MuJoCo's shared library through ``ctypes`` and called from a
 numba loop with the raw ``mjModel*``/``mjData*`` addresses, so a chunk of control steps
 runs without returning to Python: one call per chunk instead of two Python calls per
-step. The pointers are passed as 64-bit integers (same calling convention on the
-supported 64-bit platforms). This small loop is compiled once per process (numba cannot
-cache code that holds a ctypes function address); what it calls is cached as usual.
+step. The function address is a run-time argument, called through a small intrinsic
+(an ``inttoptr`` cast), so the loop holds no process-specific constant and numba's
+on-disk cache works for it like for the rest of the package.
 """
 
 from __future__ import annotations
@@ -15,11 +15,15 @@ import glob
 import os
 
 import mujoco
-import numba
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
+
+from pneumaquad.jit import compiled
 
 from .coupling import robot_control_step
 
-__all__ = ["advance_chunk", "mujoco_step_function"]
+__all__ = ["MJ_STEP_ADDRESS", "advance_chunk", "mujoco_step_function"]
 
 
 def _load_mj_step():
@@ -37,11 +41,27 @@ def _load_mj_step():
 
 
 mujoco_step_function = _load_mj_step()
-_mj_step = mujoco_step_function
+#: Address of ``mj_step(const mjModel*, mjData*)`` in this process.
+MJ_STEP_ADDRESS = ctypes.cast(mujoco_step_function, ctypes.c_void_p).value
 
 
-@numba.njit(error_model="numpy")
+@intrinsic
+def _call_step(typing_context, function_address, model_address, data_address):
+    """Call ``void f(uint64, uint64)`` at ``function_address`` (mj_step)."""
+    signature = types.void(types.uint64, types.uint64, types.uint64)
+
+    def codegen(context, builder, sig, args):
+        function_type = ir.FunctionType(ir.VoidType(), [ir.IntType(64), ir.IntType(64)])
+        pointer = builder.inttoptr(args[0], function_type.as_pointer())
+        builder.call(pointer, [args[1], args[2]])
+        return context.get_dummy_value()
+
+    return signature, codegen
+
+
+@compiled
 def advance_chunk(
+    step_address: int,
     step_count: int,
     model_address: int,
     data_address: int,
@@ -95,4 +115,4 @@ def advance_chunk(
             reference_positions, control_step, substeps,
         )
         for _ in range(physics_steps):
-            _mj_step(model_address, data_address)
+            _call_step(step_address, model_address, data_address)

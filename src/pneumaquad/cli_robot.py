@@ -1,0 +1,213 @@
+"""Command-line interface of the robot: ``pneumaquad leg ...``, ``robot ...``, ``video``.
+
+Every experiment writes a run folder (see :mod:`pneumaquad.robot.experiment`), prints
+its key figures, and optionally renders a video offscreen.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from pneumaquad.cli import OutputOption, SetOption, console, finish_run, progress_bar
+from pneumaquad.params import JOINT_NAMES, load_robot
+
+leg_app = typer.Typer(
+    help="The front-right leg on a fixed thorax (thesis 5.5.2 validation set-up).",
+    no_args_is_help=True,
+)
+robot_app = typer.Typer(help="The whole quadruped on its 12 pneumatic joints.",
+                        no_args_is_help=True)
+
+RobotParamsOption = Annotated[
+    str, typer.Option("--params", "-p", help="Robot parameter set name or TOML path.")
+]
+VideoOption = Annotated[
+    bool, typer.Option("--video/--no-video", help="Render video.mp4, a GIF and first-frame.png.")
+]
+
+
+def _simulation(params: str, overrides: list[str] | None, configuration: str,
+                environment: str = "flat", seed: int = 0, supply: str | None = None):
+    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.robot.simulation import RobotSimulation
+
+    robot = build_robot(load_robot(params, overrides or []), configuration, environment, seed)
+    return RobotSimulation(robot, supply=supply)
+
+
+def _run(simulation, phases, folder_option: Path | None, kind: str, description: str,
+         video: bool, joints: list[str] | None = None) -> None:
+    from pneumaquad.recording import create_run_folder
+    from pneumaquad.robot.experiment import run_phases
+    from pneumaquad.robot.plots import plot_body, plot_joints
+
+    folder = create_run_folder(folder_option, kind)
+    with progress_bar(kind) as update:
+        run = run_phases(simulation, phases, folder, description,
+                         lambda done, total: update(int(done * 1000), int(total * 1000)))
+    robot = simulation.robot
+    leg_joints = joints or [n for n in robot.joint_names if n.startswith("front_right")]
+    if run.recording["time [s]"].size > 1:
+        plot_joints(run.recording, leg_joints, folder / "joints.png", description)
+        if robot.free:
+            plot_body(run.recording, robot.legs, folder / "body.png", description)
+    if video:
+        _render(folder)
+    summary = dict(run.summary)
+    console.print(f"run folder: [bold]{folder}[/bold]")
+    for key in ("simulated time [s]", "wall time [s]", "real-time factor", "air consumed [NL]",
+                "mean air flow [NL/min]", "tank endurance at this mean flow [s]"):
+        console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
+    for joint, error in summary["angle rmse [deg]"].items():
+        if joint in leg_joints:
+            console.print(f"  {joint} angle rmse [deg]: {error:.3g}", markup=False,
+                          highlight=False)
+    if summary.get("interrupted"):
+        finish_run(folder, summary)
+
+
+def _render(folder: Path, fps: int = 30, width: int = 640, height: int = 480) -> None:
+    from pneumaquad.robot.video import RenderingUnavailableError, render_run_video
+
+    try:
+        files = render_run_video(folder, fps=fps, width=width, height=height)
+    except RenderingUnavailableError as error:
+        console.print(f"[yellow]no video: {error}[/yellow]")
+        return
+    console.print(f"video: {files.mp4}")
+
+
+@leg_app.command("validate")
+def leg_validate(
+    joint: Annotated[str, typer.Option(help="Tested joint: alpha, beta or gamma.")] = "gamma",
+    signal: Annotated[
+        str, typer.Option(help="steps, trapezoid, slow-sine or fast-sine.")
+    ] = "steps",
+    settle: Annotated[float, typer.Option(help="Open-loop extension phase [s].")] = 2.0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    video: VideoOption = False,
+) -> None:
+    """Thesis 5.5.2: one joint of the front-right leg follows a test signal."""
+    from pneumaquad.robot.scenarios import LEG_SIGNALS, leg_validation_phases
+
+    if joint not in JOINT_NAMES:
+        raise typer.BadParameter(f"{joint!r}: expected one of {', '.join(JOINT_NAMES)}",
+                                 param_hint="--joint")
+    if signal not in LEG_SIGNALS:
+        raise typer.BadParameter(f"{signal!r}: expected one of {', '.join(LEG_SIGNALS)}",
+                                 param_hint="--signal")
+    simulation = _simulation(params, overrides, "fixed")
+    phases = leg_validation_phases(simulation, joint, signal, settle)
+    _run(simulation, phases, output, f"leg-{joint}-{signal}",
+         f"front-right {joint}: {signal}", video)
+
+
+@leg_app.command("foot-cycle")
+def leg_foot_cycle(
+    rate: Annotated[str, typer.Option(help="slow, medium, fast or all.")] = "all",
+    cycles: Annotated[int, typer.Option(min=1, help="Cycles per rate.")] = 3,
+    alpha_gain_scale: Annotated[
+        float, typer.Option(min=0.0, help="Alpha PID gain scale (thesis: 0.75).")
+    ] = 1.0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    video: VideoOption = False,
+) -> None:
+    """Thesis 5.5.2.4: the walking-like foot cycle of the front-right leg through IK."""
+    from pneumaquad.robot.scenarios import FOOT_CYCLE_PERIODS, foot_cycle_phases
+
+    rates = tuple(FOOT_CYCLE_PERIODS) if rate == "all" else (rate,)
+    if any(r not in FOOT_CYCLE_PERIODS for r in rates):
+        raise typer.BadParameter(f"{rate!r}: expected slow, medium, fast or all",
+                                 param_hint="--rate")
+    settings = [*(overrides or []), f"controller.alpha.gain_scale={alpha_gain_scale!r}"]
+    simulation = _simulation(params, settings, "fixed")
+    phases = foot_cycle_phases(simulation, rates, cycles)
+    _run(simulation, phases, output, f"foot-cycle-{rate}",
+         f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", video)
+
+
+@robot_app.command("stand")
+def robot_stand(
+    hold: Annotated[float, typer.Option(min=0.0, help="Holding time after rising [s].")] = 3.0,
+    posture: Annotated[
+        bool, typer.Option("--posture/--no-posture", help="Body height/roll/pitch commands.")
+    ] = True,
+    environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
+    supply: Annotated[str | None, typer.Option(help="Override supply: ideal or tank.")] = None,
+    seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    video: VideoOption = True,
+) -> None:
+    """The quadruped stands up from lying on the ground, holds, follows body commands."""
+    from pneumaquad.robot.scenarios import stand_up_phases
+
+    if supply not in (None, "ideal", "tank"):
+        raise typer.BadParameter(f"{supply!r}: expected ideal or tank", param_hint="--supply")
+    simulation = _simulation(params, overrides, "quadruped", environment, seed, supply)
+    phases = stand_up_phases(simulation, hold=hold, posture=posture)
+    _run(simulation, phases, output, "robot-stand", "quadruped: stand up and hold", video)
+
+
+@robot_app.command("export")
+def robot_export(
+    path: Annotated[Path, typer.Argument(help="MJCF file to write.")],
+    configuration: Annotated[str, typer.Option(help="quadruped, fixed or testbed.")] = (
+        "quadruped"
+    ),
+    environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
+    seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+) -> None:
+    """Write the MuJoCo model as MJCF (open it with `python -m mujoco.viewer`)."""
+    from pneumaquad.robot.builder import build_robot
+
+    robot = build_robot(load_robot(params, overrides or []), configuration, environment, seed)
+    path.write_text(robot.to_xml(), encoding="utf-8")
+    console.print(f"wrote {path}")
+
+
+@robot_app.command("geometry")
+def robot_geometry(
+    params: RobotParamsOption = "crr-quadruped", overrides: SetOption = None
+) -> None:
+    """Print the cylinder linkages (l1, l2, l3, γ0) and the DH table of a leg."""
+    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.robot.kinematics import format_dh_table
+    from pneumaquad.robot.legs import leg_dh_table
+    from pneumaquad.robot.linkage import moment_arm
+
+    robot = build_robot(load_robot(params, overrides or []), "fixed")
+    for name in JOINT_NAMES:
+        link = robot.linkages[name]
+        joint = getattr(robot.parameters.leg, name)
+        arms = np.abs(moment_arm(link, np.linspace(joint.lower_limit, joint.upper_limit, 50)))
+        console.print(
+            f"{name}: l3 (barrel) {link.parent_pivot_radius * 1e3:.1f} mm, l1 (rod pin) "
+            f"{link.child_pivot_radius * 1e3:.1f} mm, l2 (retracted) "
+            f"{link.retracted_length * 1e3:.1f} mm, "
+            f"γ0 {math.degrees(link.included_angle_at_zero):.1f}°, moment arm {arms.min() * 1e3:.1f}-{arms.max() * 1e3:.1f} mm",
+            highlight=False,
+        )
+    console.print(format_dh_table(leg_dh_table(robot, "front_right")), highlight=False)
+
+
+def video_command(
+    run: Annotated[Path, typer.Argument(help="Run folder with model.xml and trajectory.npz.")],
+    fps: Annotated[int, typer.Option(min=1)] = 30,
+    width: Annotated[int, typer.Option(min=16)] = 640,
+    height: Annotated[int, typer.Option(min=16)] = 480,
+) -> None:
+    """Render a robot run offscreen to MP4, a GIF preview and first-frame.png."""
+    _render(run, fps, width, height)

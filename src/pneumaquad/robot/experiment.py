@@ -1,0 +1,225 @@
+"""Running a robot experiment: phases of commands, the run folder, summary and plots.
+
+An experiment is a list of :class:`Phase` objects. Each phase sets which joints are under
+closed-loop control, which get an open-loop valve voltage and which are left with their
+valve at its offset, and gives the joint-angle references as a function of time. The
+runner plays them at the control rate and writes the run folder:
+
+``parameters.toml``   resolved robot parameters (SI, loadable again)
+``model.xml``         the MuJoCo model (open it in MuJoCo's viewer)
+``recording.csv``     flushed while running; ``recording.parquet`` at the end
+``trajectory.npz``    time and qpos at the recording rate, for replay and video
+``summary.json``      metrics, air consumption, tank endurance, timing
+``joints.png`` ...    plots; ``video.mp4``/``first-frame.png`` when a video is asked for
+
+Ctrl-C stops at the next chunk; everything above is still written for the part that ran.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pneumaquad.interruption import deferred_interrupt
+from pneumaquad.layout import P_R, P_TS
+from pneumaquad.params import resolved_parameters_toml
+from pneumaquad.recording import RunRecorder, write_summary
+
+from .coupling import MODE_CLOSED_LOOP, MODE_OPEN_LOOP, MODE_UNCOMMANDED, X_COMMANDED
+from .recording import recording_columns, recording_row
+from .simulation import RobotSimulation
+
+__all__ = ["Phase", "RobotRun", "run_phases", "tank_endurance"]
+
+ReferenceFunction = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass
+class Phase:
+    """One stretch of an experiment.
+
+    Attributes
+    ----------
+    name : str
+    duration : float
+        [s]
+    references : callable or ndarray
+        ``f(times) -> (len(times), joints)`` angles [rad], or a constant (joints,) array.
+    closed_loop : ndarray of bool
+        Joints under position control.
+    open_loop_voltage : ndarray, optional
+        (joints,) valve voltages [V] for joints in open loop (NaN = not open loop).
+    """
+
+    name: str
+    duration: float
+    references: ReferenceFunction | np.ndarray
+    closed_loop: np.ndarray
+    open_loop_voltage: np.ndarray | None = None
+
+    def modes(self) -> np.ndarray:
+        """Per-joint control mode codes of :mod:`pneumaquad.robot.coupling`."""
+        modes = np.where(self.closed_loop, MODE_CLOSED_LOOP, MODE_UNCOMMANDED)
+        if self.open_loop_voltage is not None:
+            modes = np.where(np.isfinite(self.open_loop_voltage), MODE_OPEN_LOOP, modes)
+        return modes
+
+
+@dataclass
+class RobotRun:
+    """Outcome of :func:`run_phases`: recording arrays, summary, interruption flag."""
+
+    recording: dict[str, np.ndarray]
+    summary: dict[str, Any]
+    interrupted: bool
+    wall_time: float
+    folder: Path
+    extra_files: list[Path] = field(default_factory=list)
+
+
+def tank_endurance(simulation: RobotSimulation, mean_flow: float) -> float:
+    """Time [s] the actuator files' tank lasts at a mean air flow [kg/s] (thesis 1.1).
+
+    The usable air is what the tank holds above the regulated supply pressure at the
+    tank temperature (ideal gas): m = V·(p0 − ps)/(R·T).
+    """
+    supply = simulation.robot.actuators["alpha"].supply
+    if supply.tank_volume is None or supply.tank_initial_pressure is None or mean_flow <= 0:
+        return math.nan
+    temperature = supply.tank_temperature or float(simulation.params[0, P_TS])
+    usable = (
+        supply.tank_volume
+        * (supply.tank_initial_pressure - supply.supply_pressure)
+        / (simulation.params[0, P_R] * temperature)
+    )
+    return usable / mean_flow
+
+
+def _reference_table(phase: Phase, start: float, steps: int, step: float, count: int):
+    times = start + step * np.arange(1, steps + 1)
+    if callable(phase.references):
+        table = np.asarray(phase.references(times), dtype=float)
+    else:
+        table = np.broadcast_to(np.asarray(phase.references, dtype=float), (steps, count))
+    return np.ascontiguousarray(table.reshape(steps, count))
+
+
+def run_phases(
+    simulation: RobotSimulation,
+    phases: list[Phase],
+    folder: Path,
+    description: str,
+    progress: Callable[[float, float], None] | None = None,
+    extra_summary: dict[str, Any] | None = None,
+) -> RobotRun:
+    """Play ``phases`` on ``simulation`` and write the run folder (module docstring)."""
+    robot = simulation.robot
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "parameters.toml").write_text(
+        resolved_parameters_toml(robot.parameters), encoding="utf-8"
+    )
+    (folder / "model.xml").write_text(robot.to_xml(), encoding="utf-8")
+    every = robot.parameters.simulation.recording_every
+    dt = simulation.control_step
+    count = robot.joint_count
+    total = sum(p.duration for p in phases)
+    times, qpos = [], []
+    interrupted = False
+    started = time.perf_counter()
+    columns = recording_columns(simulation)
+    phase_starts = []
+    controlled = np.zeros(count, dtype=bool)
+    with RunRecorder(folder, columns) as recorder, deferred_interrupt() as stop:
+        recorder.append(recording_row(simulation, simulation.reference_angles))
+        times.append(simulation.time)
+        qpos.append(simulation.data.qpos.copy())
+        for phase in phases:
+            phase_starts.append((phase.name, simulation.time))
+            controlled |= np.asarray(phase.closed_loop, dtype=bool)
+            modes = phase.modes()
+            voltages = phase.open_loop_voltage
+            steps = round(phase.duration / dt)
+            table = _reference_table(phase, simulation.time, steps, dt, count)
+            simulation.extra[:, X_COMMANDED] = modes
+            if voltages is not None:
+                simulation.open_loop_voltage[:] = np.where(
+                    np.isfinite(voltages), voltages, simulation.open_loop_voltage
+                )
+            done = 0
+            while done < steps and not stop.requested:
+                chunk = min(every, steps - done)
+                simulation.step(chunk, table, done)
+                done += chunk
+                recorder.append(recording_row(simulation, table[done - 1]))
+                times.append(simulation.time)
+                qpos.append(simulation.data.qpos.copy())
+                if progress is not None and done % (every * 20) == 0:
+                    progress(simulation.time, total)
+            if stop.requested:
+                interrupted = True
+                break
+        recording = recorder.to_arrays()
+    wall = time.perf_counter() - started
+    np.savez(folder / "trajectory.npz", time=np.array(times), qpos=np.array(qpos))
+    summary = _summary(
+        simulation, recording, description, wall, interrupted, phase_starts, controlled
+    )
+    if extra_summary:
+        summary.update(extra_summary)
+    write_summary(folder, summary)
+    return RobotRun(recording, summary, interrupted, wall, folder)
+
+
+def _summary(
+    simulation: RobotSimulation,
+    recording: dict[str, np.ndarray],
+    description: str,
+    wall: float,
+    interrupted: bool,
+    phase_starts: list[tuple[str, float]],
+    controlled: np.ndarray,
+) -> dict[str, Any]:
+    robot = simulation.robot
+    simulated = float(recording["time [s]"][-1] - recording["time [s]"][0])
+    air = simulation.air_consumed()
+    per_joint = simulation.air_consumed_per_joint()
+    mean_flow = air / simulated if simulated > 0 else math.nan
+    normal_litres_per_kg = (
+        simulation.params[0, P_R] * 273.15 / 101325.0 * 1000.0
+    )
+    summary: dict[str, Any] = {
+        "description": description,
+        "parameter set": robot.parameters.meta.name,
+        "configuration": robot.configuration,
+        "environment": robot.environment,
+        "seal friction": robot.parameters.simulation.seal_friction,
+        "control step [s]": simulation.control_step,
+        "substeps": simulation.substeps,
+        "interrupted": interrupted,
+        "simulated time [s]": simulated,
+        "wall time [s]": wall,
+        "real-time factor": simulated / wall if wall > 0 else math.nan,
+        "phases": {name: start for name, start in phase_starts},
+        "air consumed [kg]": air,
+        "air consumed [NL]": air * normal_litres_per_kg,
+        "mean air flow [NL/min]": mean_flow * normal_litres_per_kg * 60.0,
+        "air consumed per joint [NL]": {
+            name: float(value * normal_litres_per_kg)
+            for name, value in zip(robot.joint_names, per_joint, strict=True)
+        },
+        "tank endurance at this mean flow [s]": tank_endurance(simulation, mean_flow),
+    }
+    errors = {}
+    for name, closed in zip(robot.joint_names, controlled, strict=True):
+        reference = recording[f"{name} reference [rad]"]
+        angle = recording[f"{name} angle [rad]"]
+        if closed:
+            errors[name] = float(np.degrees(np.sqrt(np.mean((angle - reference) ** 2))))
+    summary["angle rmse [deg]"] = errors
+    return summary

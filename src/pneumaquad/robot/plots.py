@@ -1,0 +1,75 @@
+"""Plots of robot runs: joint tracking with both chamber pressures (like thesis Fig. 38-45)
+and the body: thorax height and attitude, foot forces and air consumed."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from pneumaquad.plotting import DPI, pascals_to_psi, plt
+
+__all__ = ["plot_body", "plot_joints"]
+
+
+def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: Path,
+                title: str = "") -> Path:
+    """Per joint: reference vs actual angle [deg] above cap and rod pressure [psia]."""
+    time = recording["time [s]"]
+    fig, axes = plt.subplots(2, len(joints), figsize=(4.2 * len(joints), 5.6), sharex=True,
+                             squeeze=False)
+    for column, joint in enumerate(joints):
+        angle_axis, pressure_axis = axes[0, column], axes[1, column]
+        angle_axis.plot(time, np.degrees(recording[f"{joint} reference [rad]"]), "k--",
+                        lw=1.0, label="reference")
+        angle_axis.plot(time, np.degrees(recording[f"{joint} angle [rad]"]), "C0", lw=1.2,
+                        label="simulated")
+        angle_axis.set_title(joint.replace("_", " "))
+        angle_axis.set_ylabel("Angle (deg)")
+        pressure_axis.plot(time, pascals_to_psi(recording[f"{joint} cap pressure [Pa]"]), "C3",
+                           lw=1.0, label="cap")
+        pressure_axis.plot(time, pascals_to_psi(recording[f"{joint} rod pressure [Pa]"]), "C2",
+                           lw=1.0, label="rod")
+        pressure_axis.set_ylabel("Pressure (psia)")
+        pressure_axis.set_xlabel("Time (s)")
+        for axis in (angle_axis, pressure_axis):
+            axis.grid(True, alpha=0.35)
+            axis.legend(loc="best", fontsize="small", framealpha=0.85)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
+
+
+def plot_body(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
+              title: str = "") -> Path:
+    """Thorax height [m], roll/pitch [deg], foot normal forces [N] and air consumed [NL]."""
+    time = recording["time [s]"]
+    fig, axes = plt.subplots(4, 1, figsize=(8.0, 8.5), sharex=True)
+    axes[0].plot(time, recording["thorax z [m]"], "C0")
+    axes[0].set_ylabel("Thorax height (m)")
+    axes[1].plot(time, np.degrees(recording["thorax roll [rad]"]), "C1", label="roll")
+    axes[1].plot(time, np.degrees(recording["thorax pitch [rad]"]), "C2", label="pitch")
+    axes[1].set_ylabel("Attitude (deg)")
+    for leg in legs:
+        axes[2].plot(time, recording[f"{leg} foot normal force [N]"], lw=1.0,
+                     label=leg.replace("_", " "))
+    axes[2].set_ylabel("Foot force (N)")
+    axes[3].plot(time, recording["air consumed [NL]"], "C4")
+    axes[3].set_ylabel("Air consumed (NL)")
+    axes[3].set_xlabel("Time (s)")
+    for axis in axes:
+        axis.grid(True, alpha=0.35)
+        if axis.get_legend_handles_labels()[0]:
+            axis.legend(loc="best", fontsize="small", framealpha=0.85)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path

@@ -1,0 +1,118 @@
+"""Recording rows of a robot run: per-joint, thorax, feet and supply columns (SI).
+
+Columns are named ``quantity [unit]``; per-joint columns start with the joint name
+(``"front_right_gamma angle [rad]"``), per-leg columns with the leg name.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from pneumaquad.layout import (
+    O_PNEUMATIC_FORCE,
+    P_R,
+    S_AIR_CONSUMED,
+    S_CAP_PRESSURE,
+    S_ROD_PRESSURE,
+)
+from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
+
+from .simulation import RobotSimulation
+
+__all__ = ["JOINT_QUANTITIES", "recording_columns", "recording_row", "thorax_attitude"]
+
+#: Per-joint quantities, in column order.
+JOINT_QUANTITIES = (
+    "reference [rad]",
+    "angle [rad]",
+    "angular velocity [rad/s]",
+    "piston reference [m]",
+    "piston position [m]",
+    "piston velocity [m/s]",
+    "command [V]",
+    "cap pressure [Pa]",
+    "rod pressure [Pa]",
+    "force [N]",
+    "air consumed [kg]",
+)
+_THORAX = ("thorax x [m]", "thorax y [m]", "thorax z [m]", "thorax roll [rad]",
+           "thorax pitch [rad]", "thorax yaw [rad]")
+_SUPPLY = ("supply pressure [Pa]", "air consumed [kg]", "air consumed [NL]")
+
+
+def recording_columns(simulation: RobotSimulation) -> tuple[str, ...]:
+    """Column names of a robot run's recording."""
+    robot = simulation.robot
+    columns = ["time [s]"]
+    for joint in robot.joint_names:
+        columns += [f"{joint} {quantity}" for quantity in JOINT_QUANTITIES]
+    columns += list(_THORAX)
+    for leg in robot.legs:
+        columns += [f"{leg} foot x [m]", f"{leg} foot y [m]", f"{leg} foot z [m]",
+                    f"{leg} foot normal force [N]"]
+    columns += list(_SUPPLY)
+    return tuple(columns)
+
+
+def thorax_attitude(simulation: RobotSimulation) -> np.ndarray:
+    """Roll, pitch, yaw [rad] of the thorax relative to its nominal placement.
+
+    The nominal placement (thesis main.cpp: thorax axis forward, along world x) has all
+    three zero; the angles are Z-Y-X Euler angles of the rotation from it, in the world.
+    """
+    robot = simulation.robot
+    rotation = simulation.data.xmat[robot.thorax_id].reshape(3, 3)
+    nominal = simulation.model.body_quat[robot.thorax_id]
+    nominal_matrix = np.zeros(9)
+    mujoco.mju_quat2Mat(nominal_matrix, nominal)
+    relative = rotation @ nominal_matrix.reshape(3, 3).T
+    yaw = np.arctan2(relative[1, 0], relative[0, 0])
+    pitch = -np.arcsin(np.clip(relative[2, 0], -1.0, 1.0))
+    roll = np.arctan2(relative[2, 1], relative[2, 2])
+    return np.array([roll, pitch, yaw])
+
+
+def _foot_normal_forces(simulation: RobotSimulation) -> np.ndarray:
+    robot = simulation.robot
+    model, data = simulation.model, simulation.data
+    tibia_bodies = [
+        mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia") for leg in robot.legs
+    ]
+    forces = np.zeros(len(robot.legs))
+    wrench = np.zeros(6)
+    for index in range(data.ncon):
+        contact = data.contact[index]
+        bodies = (model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2])
+        for leg_index, body in enumerate(tibia_bodies):
+            if body in bodies:
+                mujoco.mj_contactForce(model, data, index, wrench)
+                forces[leg_index] += abs(wrench[0])
+    return forces
+
+
+def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> np.ndarray:
+    """One recording row (layout of :func:`recording_columns`) of the current state."""
+    s = simulation
+    robot = s.robot
+    per_joint = np.column_stack(
+        [
+            reference_angles,
+            s.data.qpos[robot.qpos_address],
+            s.data.qvel[robot.dof_address],
+            s.reference_positions,
+            s.positions,
+            s.velocities,
+            s.commands,
+            s.state[:, S_CAP_PRESSURE],
+            s.state[:, S_ROD_PRESSURE],
+            s.outputs[:, O_PNEUMATIC_FORCE],
+            s.state[:, S_AIR_CONSUMED],
+        ]
+    ).ravel()
+    thorax = np.concatenate([s.data.xpos[robot.thorax_id], thorax_attitude(s)])
+    feet = np.column_stack([s.foot_positions(), _foot_normal_forces(s)]).ravel()
+    air = s.air_consumed()
+    normal_litres = air * s.params[0, P_R] * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
+    supply = np.array([s.supply_pressure(), air, normal_litres])
+    return np.concatenate([[s.time], per_joint, thorax, feet, supply])
