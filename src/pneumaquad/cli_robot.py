@@ -197,7 +197,8 @@ def robot_geometry(
             f"{name}: l3 (barrel) {link.parent_pivot_radius * 1e3:.1f} mm, l1 (rod pin) "
             f"{link.child_pivot_radius * 1e3:.1f} mm, l2 (retracted) "
             f"{link.retracted_length * 1e3:.1f} mm, "
-            f"γ0 {math.degrees(link.included_angle_at_zero):.1f}°, moment arm {arms.min() * 1e3:.1f}-{arms.max() * 1e3:.1f} mm",
+            f"γ0 {math.degrees(link.included_angle_at_zero):.1f}°, "
+            f"moment arm {arms.min() * 1e3:.1f}-{arms.max() * 1e3:.1f} mm",
             highlight=False,
         )
     console.print(format_dh_table(leg_dh_table(robot, "front_right")), highlight=False)

@@ -45,19 +45,20 @@ class DemoReport:
 
     def write(self) -> Path:
         lines = [
-            "# pneumaquad rig demo",
+            "# pneumaquad demo",
             "",
-            "Single-DoF test rig of Daepp (2011), ch. 4, parameter set `thesis-rig`. "
+            "Single-DoF test rig of Daepp (2011), ch. 4 (parameter set `thesis-rig`), and the "
+            "quadruped on 12 pneumatic joints, ch. 5 (`crr-quadruped`). "
             "Each section links its run folder (recording.csv/.parquet, summary.json, "
             "parameters.toml).",
             "",
         ]
         page = [
             "<!doctype html><html><head><meta charset='utf-8'>",
-            "<title>pneumaquad rig demo</title><style>body{font-family:sans-serif;"
+            "<title>pneumaquad demo</title><style>body{font-family:sans-serif;"
             "max-width:1000px;margin:auto}table{border-collapse:collapse}"
             "td,th{border:1px solid #bbb;padding:2px 8px}img{max-width:100%}</style>"
-            "</head><body><h1>pneumaquad rig demo</h1>",
+            "</head><body><h1>pneumaquad demo</h1>",
         ]
         for section in self.sections:
             figure = section["figure"]
@@ -103,7 +104,12 @@ def run_demo(folder: Path, progress: Callable[[int, int], None] | None = None) -
     """Run the demo experiments into ``folder`` and write the report; returns report.html."""
     folder.mkdir(parents=True, exist_ok=True)
     report = DemoReport(folder)
-    steps = [_open_loop_steps, _spacer, _tracking, _stiction, _reference_solver, _tank]
+    from pneumaquad.robot.demo_sections import ROBOT_SECTIONS
+
+    steps = [
+        _open_loop_steps, _spacer, _tracking, _stiction, _reference_solver, _tank,
+        *ROBOT_SECTIONS,
+    ]
     for index, experiment in enumerate(steps):
         experiment(folder, report)
         if progress is not None:

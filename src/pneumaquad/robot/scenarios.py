@@ -229,7 +229,7 @@ def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: f
         return lying + first * (tucked - lying) + second * (standing - tucked)
 
     phases = [
-        Phase("rest", 0.5, lying, np.zeros(count, dtype=bool)),
+        Phase("rest", 0.5, lying, closed),
         Phase("stand up", rise_time, rise, closed),
         Phase("hold", hold, standing, closed),
     ]
