@@ -39,6 +39,8 @@ CONFIGURATIONS = ("quadruped", "fixed", "testbed")
 
 _ROBOT_CONTYPE, _ROBOT_CONAFFINITY = WORLD_CONAFFINITY, WORLD_CONTYPE
 _CYLINDER_RGBA = (0.75, 0.75, 0.78, 1.0)
+#: Time constant of the seal's dry-friction constraint [s].
+SEAL_FRICTION_TIME_CONSTANT = 0.002
 
 
 @dataclass(frozen=True)
@@ -214,6 +216,12 @@ def _add_cylinder(
     tendon.wrap_site(sites[0])
     tendon.wrap_site(sites[1])
     tendon.armature = moving_mass
+    # Dry seal friction that sticks: a stiff friction constraint (time constant 2 ms, two
+    # default steps, and never below MuJoCo's 2-step minimum; impedance 0.99), as
+    # recommended in DESIGN.md section 4. A fixed time constant keeps the friction the same
+    # physics when the step is refined.
+    tendon.solref_friction = [max(SEAL_FRICTION_TIME_CONSTANT, 2.0 * spec.option.timestep), 1.0]
+    tendon.solimp_friction = [0.99, 0.99, 0.001, 0.5, 2.0]
     tendon.width = 0.6 * actuator.cylinder.bore
     tendon.rgba = list(_CYLINDER_RGBA)
     motor = spec.add_actuator(name=f"{prefix}_cylinder", target=f"{prefix}_cylinder")
@@ -265,10 +273,11 @@ def _add_leg(
             damping=joint.damping,
         )
         if link_name == "coxa":
-            _capsule(body, f"{leg}_coxa1", p.coxa1, np.eye(4), p.contact.body_friction, contact_tc)
-            _capsule(body, f"{leg}_coxa2", p.coxa2, coxa2_in_coxa1, p.contact.body_friction,
-                     contact_tc)
-            _inertia_override(body, p.coxa1, body.mass)
+            first = _capsule(body, f"{leg}_coxa1", p.coxa1, np.eye(4), p.contact.body_friction,
+                             contact_tc)
+            second = _capsule(body, f"{leg}_coxa2", p.coxa2, coxa2_in_coxa1,
+                              p.contact.body_friction, contact_tc)
+            _inertia_override(body, p.coxa1, first.mass + second.mass)
         else:
             link = getattr(p, link_name)
             friction = p.contact.foot_friction if link_name == "tibia" else p.contact.body_friction
@@ -381,6 +390,9 @@ def build_robot(
     )
     spec.option.iterations = p.simulation.solver_iterations
     spec.option.noslip_iterations = p.simulation.noslip_iterations
+    # Elliptic friction cones: with the pyramidal default and ground friction 5 the feet
+    # sank about 2 cm into the ground; elliptic cones keep it near 0.15 mm.
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.compiler.degree = False
     _add_visual_assets(spec)
     add_environment(spec, environment, p.environment, p.contact, seed)

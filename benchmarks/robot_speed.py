@@ -1,0 +1,309 @@
+"""Wall time of the coupled robot simulation: the whole quadruped standing on flat ground.
+
+Setup: ``crr-quadruped`` as shipped, ``quadruped`` configuration (free thorax) on the
+``flat`` environment; 12 cylinders with the full actuator model (underlapped valve,
+Stribeck seal friction in MuJoCo's solver, adiabatic chambers), the shipped Heun
+substeps and a 1 ms control step (one MuJoCo step per control step), four foot contacts.
+The robot is put standing: every leg at alpha 0°, beta -20°, gamma 50°, the thorax
+lowered until the lowest foot touches the ground, all joints commanded closed-loop to
+those angles and left to settle for 1 s. Then, after a warm-up (numba compiles the
+stepping loop on the first call), it measures:
+
+* **full**: ``RobotSimulation.step(N)`` for N control steps in one call (controllers,
+  pneumatic kernel, forces into MuJoCo and ``mj_step``, all inside one compiled loop):
+  µs per control step and the real-time factor (simulated s / wall s);
+* **full, recording**: the same in chunks of ``recording_every`` steps (10) with one
+  recording row read out after each chunk, as an experiment runner would;
+* **bare MuJoCo**: the same model and state stepped by ``mujoco.mj_step(m, d, nstep=N)``
+  with ``data.ctrl`` held at the standing cylinder forces (plain constant joint motors;
+  the same contacts, pose and seal-friction constraints), and the pneumatic overhead
+  (full - bare) / bare. Without a controller the constant forces slowly extend the legs
+  (the thorax rises a few cm over the 5 s), but the constraint rows stay the same (four
+  pyramidal foot contacts and 12 tendon friction rows);
+* a **breakdown** per control step, each part timed alone in its own loop on the same
+  12 rows: the pneumatic kernel (``pneumaquad.kernel.step_actuators`` from a compiled
+  loop), the whole control step without MuJoCo (``robot_control_step``: linkage, PID,
+  kernel, forces and friction written back) and hence the controller and coupling glue
+  (control step - kernel), 12 ``pid_update`` calls alone, and the recording (one row
+  of readouts, divided by ``recording_every``).
+
+Every figure is the median and the best (min) of ``--repeats`` repeats, taken in
+interleaved rounds after one warm-up each, like the other scripts in this folder;
+differences and ratios are per round. Nothing is asserted. Targets (issue): ≥ 50× real
+time, pneumatic overhead ≤ 25 % over bare MuJoCo. Runs in well under a minute.
+
+Run: ``.venv/bin/python benchmarks/robot_speed.py [--steps 5000] [--repeats 5] [--json out.json]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+from numba import njit
+
+from _bench import Stats, machine_line, stats, table, write_json
+from pneumaquad.control.pid import pid_update
+from pneumaquad.kernel import step_actuators
+from pneumaquad.params import load_robot
+from pneumaquad.robot.builder import build_robot
+from pneumaquad.robot.coupling import robot_control_step
+from pneumaquad.robot.simulation import RobotSimulation
+
+POSTURE_DEG = (0.0, -20.0, 50.0)
+TARGET_REAL_TIME = 50.0
+TARGET_OVERHEAD = 0.25
+
+
+@njit(cache=False)
+def kernel_loop(count, params, state, commands, positions, velocities, dt, substeps, supply, out):
+    """``count`` calls of the pneumatic kernel on all rows, from compiled code."""
+    for _ in range(count):
+        step_actuators(params, state, commands, positions, velocities, dt, substeps, supply, out)
+
+
+@njit(cache=False)
+def pid_loop(count, gains, pid_state, references, positions, dt):
+    """``count`` control steps of the 12 PID updates alone."""
+    total = 0.0
+    for _ in range(count):
+        for i in range(gains.shape[0]):
+            total += pid_update(gains[i], pid_state[i], references[i], positions[i], dt)
+    return total
+
+
+@njit(cache=False)
+def control_loop(
+    count, ten_length, ten_velocity, tendon_ids, actuator_ids, ctrl, frictionloss, damping,
+    linkage, seal, mujoco_friction, params, state, supply, outputs, gains, gain_scale, extra,
+    pid_state, force_mean, reference_angles, open_loop_voltage, commands, positions,
+    velocities, reference_positions, dt, substeps,
+):  # fmt: skip
+    """``count`` calls of the whole control step (no MuJoCo step) from compiled code."""
+    for _ in range(count):
+        robot_control_step(
+            ten_length, ten_velocity, tendon_ids, actuator_ids, ctrl, frictionloss, damping,
+            linkage, seal, mujoco_friction, params, state, supply, outputs, gains, gain_scale,
+            extra, pid_state, force_mean, reference_angles, open_loop_voltage, commands,
+            positions, velocities, reference_positions, dt, substeps,
+        )  # fmt: skip
+
+
+def standing_simulation() -> RobotSimulation:
+    """The quadruped standing on flat ground, closed-loop, settled for 1 s."""
+    robot = build_robot(load_robot("crr-quadruped"), "quadruped", "flat")
+    sim = RobotSimulation(robot)
+    pose = np.tile(np.radians(POSTURE_DEG), len(robot.legs))
+    sim.set_pose(pose)
+    thorax = sim.data.qpos[0:3].copy()
+    thorax[2] -= sim.foot_positions()[:, 2].min()  # lowest foot on the ground (z = 0)
+    sim.set_pose(pose, thorax_position=thorax, thorax_quaternion=sim.data.qpos[3:7].copy())
+    sim.command_angles(pose)
+    sim.step(round(1.0 / sim.control_step))
+    return sim
+
+
+def interleaved(calls: dict[str, Callable[[], float]], repeats: int) -> dict[str, Stats]:
+    """Each call (returns seconds per step) once to warm up, then ``repeats`` rounds in turn.
+
+    Interleaving spreads a slow spell of a shared machine over all measurements, and
+    keeps the per-round pairs (full vs bare, control step vs kernel) comparable.
+    """
+    for call in calls.values():
+        call()
+    samples: dict[str, list[float]] = {name: [] for name in calls}
+    for _ in range(repeats):
+        for name, call in calls.items():
+            samples[name].append(call())
+    return {name: stats(values) for name, values in samples.items()}
+
+
+def time_full(sim: RobotSimulation, steps: int) -> float:
+    start = time.perf_counter()
+    sim.step(steps)
+    return (time.perf_counter() - start) / steps
+
+
+def recording_row(sim: RobotSimulation) -> tuple:
+    """What one recording row reads out of the simulation."""
+    return (
+        sim.time,
+        sim.joint_angles(),
+        sim.joint_velocities(),
+        sim.chamber_pressures(),
+        sim.cylinder_forces(),
+        sim.commands.copy(),
+        sim.positions.copy(),
+        sim.reference_positions.copy(),
+        sim.foot_positions(),
+        sim.data.qpos[0:7].copy(),
+        sim.air_consumed(),
+    )
+
+
+def time_full_recording(sim: RobotSimulation, steps: int, every: int) -> float:
+    rows = []
+    start = time.perf_counter()
+    for _ in range(steps // every):
+        sim.step(every)
+        rows.append(recording_row(sim))
+    return (time.perf_counter() - start) / (steps // every * every)
+
+
+def time_bare(sim: RobotSimulation, snapshot: mujoco.MjData, steps: int) -> float:
+    data = mujoco.MjData(sim.model)
+    mujoco.mj_copyData(data, sim.model, snapshot)  # same pose, contacts and motor forces
+    start = time.perf_counter()
+    mujoco.mj_step(sim.model, data, nstep=steps)
+    return (time.perf_counter() - start) / steps
+
+
+def time_kernel(sim: RobotSimulation, steps: int) -> float:
+    state, supply, outputs = sim.state.copy(), sim.supply.copy(), sim.outputs.copy()
+    commands, positions = sim.commands.copy(), sim.positions.copy()
+    velocities = sim.velocities.copy()
+    start = time.perf_counter()
+    kernel_loop(steps, sim.params, state, commands, positions, velocities, sim.control_step,
+                sim.substeps, supply, outputs)  # fmt: skip
+    return (time.perf_counter() - start) / steps
+
+
+def time_control_step(sim: RobotSimulation, steps: int) -> float:
+    d, m = sim.data, sim.model
+    args = (
+        d.ten_length.copy(), d.ten_velocity.copy(), sim.robot.tendon_id, sim.robot.actuator_id,
+        d.ctrl.copy(), m.tendon_frictionloss.copy(), m.tendon_damping.copy(), sim.linkage,
+        sim.seal, sim.mujoco_friction, sim.params, sim.state.copy(), sim.supply.copy(),
+        sim.outputs.copy(), sim.gains, sim.gain_scale, sim.extra, sim.pid_state.copy(),
+        sim.force_mean.copy(), sim.reference_angles.copy(), sim.open_loop_voltage.copy(),
+        sim.commands.copy(), sim.positions.copy(), sim.velocities.copy(),
+        sim.reference_positions.copy(), sim.control_step, sim.substeps,
+    )  # fmt: skip
+    start = time.perf_counter()
+    control_loop(steps, *args)
+    return (time.perf_counter() - start) / steps
+
+
+def time_pid(sim: RobotSimulation, steps: int) -> float:
+    references = sim.reference_positions.copy()
+    positions = sim.positions + 1e-4 * np.sin(np.arange(sim.robot.joint_count))
+    pid_state = sim.pid_state.copy()
+    start = time.perf_counter()
+    pid_loop(steps, sim.gains, pid_state, references, positions, sim.control_step)
+    return (time.perf_counter() - start) / steps
+
+
+def time_recording(sim: RobotSimulation, rows: int) -> float:
+    start = time.perf_counter()
+    for _ in range(rows):
+        recording_row(sim)
+    return (time.perf_counter() - start) / rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--steps", type=int, default=5000, help="control steps per repeat")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--json", default=None, help="write the figures to this file")
+    args = parser.parse_args()
+    n = args.steps
+
+    start = time.perf_counter()
+    sim = standing_simulation()  # includes compiling the stepping loop on first use
+    setup_s = time.perf_counter() - start
+    dt = sim.control_step
+    every = sim.robot.parameters.simulation.recording_every
+    print(f"coupled robot simulation speed  ({machine_line()})")
+    print(
+        f"crr-quadruped, quadruped on flat ground, {sim.robot.joint_count} cylinders "
+        f"(full valve model), {sim.substeps} Heun substeps, control step {dt * 1e3:g} ms, "
+        f"{n} steps per repeat, {args.repeats} repeats after a warm-up"
+    )
+    print(f"setup (build, compile or load the stepping loop, 1 s settling): {setup_s:.1f} s")
+
+    snapshot = mujoco.MjData(sim.model)
+    mujoco.mj_copyData(snapshot, sim.model, sim.data)
+    figures = interleaved(
+        {
+            "full": lambda: time_full(sim, n),
+            "full, recording every 10": lambda: time_full_recording(sim, n, every),
+            "bare MuJoCo mj_step": lambda: time_bare(sim, snapshot, n),
+            "pneumatic kernel": lambda: time_kernel(sim, n),
+            "control step w/o MuJoCo": lambda: time_control_step(sim, n),
+            "12 pid_update": lambda: time_pid(sim, n),
+            "recording row / 10": lambda: time_recording(sim, n // every) / every,
+        },
+        args.repeats,
+    )
+    contacts, rows = sim.data.ncon, sim.data.nefc
+    height = float(sim.data.qpos[2])
+
+    us = {name: value.scaled(1e6) for name, value in figures.items()}
+    full, bare = us["full"], us["bare MuJoCo mj_step"]
+    real_time = stats([dt * 1e6 / value for value in full.samples])
+    overhead = stats([(f - b) / b for f, b in zip(full.samples, bare.samples, strict=True)])
+    print(f"standing: thorax at {height:.3f} m, {contacts} contacts, {rows} constraint rows\n")
+
+    print(table(
+        ["measurement", "µs/step median", "µs/step best", "× real time (median)"],
+        [
+            [name, f"{value.median:.2f}", f"{value.min:.2f}", f"{dt * 1e6 / value.median:.0f}"]
+            for name, value in us.items()
+            if name in ("full", "full, recording every 10", "bare MuJoCo mj_step")
+        ],
+    ))  # fmt: skip
+    print(
+        f"\nreal-time factor (full): median {real_time.median:.1f}×, best {real_time.max:.1f}×"
+        f"  -> target ≥ {TARGET_REAL_TIME:.0f}×: "
+        f"{'met' if real_time.median >= TARGET_REAL_TIME else 'NOT met'}"
+    )
+    print(
+        f"pneumatic overhead (full - bare) / bare: median {100 * overhead.median:.0f} %, "
+        f"best {100 * overhead.min:.0f} %  -> target ≤ {100 * TARGET_OVERHEAD:.0f} %: "
+        f"{'met' if overhead.median <= TARGET_OVERHEAD else 'NOT met'}"
+    )
+
+    kernel = us["pneumatic kernel"]
+    control = us["control step w/o MuJoCo"]
+    glue = stats([c - k for c, k in zip(control.samples, kernel.samples, strict=True)])
+    parts = [
+        ["MuJoCo step (bare)", bare],
+        ["pneumatic kernel (step_actuators, 12 rows)", kernel],
+        ["controller + coupling (control step - kernel)", glue],
+        ["  of which 12 pid_update", us["12 pid_update"]],
+        ["recording (one row every 10 steps)", us["recording row / 10"]],
+    ]
+    summed = bare.median + control.median + us["recording row / 10"].median
+    print("\nbreakdown per control step (each part timed alone):")
+    print(table(
+        ["part", "µs median", "µs best", "share of full+recording"],
+        [
+            [name, f"{value.median:.2f}", f"{value.min:.2f}",
+             f"{100 * value.median / us['full, recording every 10'].median:.0f} %"]
+            for name, value in parts
+        ],
+    ))  # fmt: skip
+    print(
+        f"sum of parts {summed:.2f} µs vs measured full + recording "
+        f"{us['full, recording every 10'].median:.2f} µs (the rest: chunk calls from Python, "
+        "cache effects)"
+    )
+    write_json(
+        args.json,
+        {
+            "steps": n,
+            "control_step": dt,
+            "substeps": sim.substeps,
+            "us_per_step": us,
+            "real_time_factor": real_time,
+            "pneumatic_overhead": overhead,
+            "controller_glue_us": glue,
+        },
+    )
+
+
+if __name__ == "__main__":
+    main()
