@@ -1,0 +1,72 @@
+"""Parameter identification from rig recordings (thesis 4.2.2-4.2.3, App. B.2).
+
+Friction from open-loop steps (stiction peaks, Coulomb-viscous and Stribeck-tanh fits),
+the underlapped valve's input-pressure curves from fixed-piston tests, equivalent orifice
+areas fitted around the rig simulator and their polynomials, and parameter files written
+from the results. Pure functions over recordings (dicts of SI arrays keyed
+``"quantity [unit]"``, simulated or from `pneumaquad.measured`).
+"""
+
+from .friction import (
+    STRIBECK_TANH_PARAMETERS,
+    FrictionPoints,
+    StictionEstimate,
+    fit_coulomb_viscous,
+    fit_stribeck_tanh,
+    kinetic_friction_points,
+    stiction_from_step,
+    stribeck_tanh_curve,
+    summarize_stiction,
+)
+from .preprocess import (
+    FilterSettings,
+    IdentificationError,
+    PreparedSignals,
+    prepare_signals,
+    select_step,
+)
+from .report import FitResult, updates_from_fit, write_parameter_file
+from .valve import (
+    AreaPolynomials,
+    EquivalentAreaFit,
+    InputPressureCurves,
+    SteadyStatePoints,
+    area_polynomial_updates,
+    areas_table,
+    equivalent_area_for_step,
+    fit_area_polynomials,
+    fit_input_pressure_curve,
+    input_pressure_curves,
+    steady_state_points,
+)
+
+__all__ = [
+    "STRIBECK_TANH_PARAMETERS",
+    "AreaPolynomials",
+    "EquivalentAreaFit",
+    "FilterSettings",
+    "FitResult",
+    "FrictionPoints",
+    "IdentificationError",
+    "InputPressureCurves",
+    "PreparedSignals",
+    "SteadyStatePoints",
+    "StictionEstimate",
+    "area_polynomial_updates",
+    "areas_table",
+    "equivalent_area_for_step",
+    "fit_area_polynomials",
+    "fit_coulomb_viscous",
+    "fit_input_pressure_curve",
+    "fit_stribeck_tanh",
+    "input_pressure_curves",
+    "kinetic_friction_points",
+    "prepare_signals",
+    "select_step",
+    "steady_state_points",
+    "stiction_from_step",
+    "stribeck_tanh_curve",
+    "summarize_stiction",
+    "updates_from_fit",
+    "write_parameter_file",
+]

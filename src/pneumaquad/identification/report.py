@@ -26,6 +26,7 @@ from pneumaquad.params import DATA_DIR, ParameterError, Problem, apply_overrides
 __all__ = [
     "FitResult",
     "covariance_from_jacobian",
+    "format_r_squared",
     "parameter_name_and_unit",
     "r_squared",
     "updates_from_fit",
@@ -81,6 +82,11 @@ class FitResult:
     def rows(self) -> list[tuple[str, float, float]]:
         """(key, value, standard error) per parameter, for tables."""
         return [(key, value, self.standard_errors[key]) for key, value in self.parameters.items()]
+
+
+def format_r_squared(value: float) -> str:
+    """R² with four decimals, or ``"n/a"`` where it is not defined (NaN)."""
+    return "n/a" if math.isnan(value) else f"{value:.4f}"
 
 
 def parameter_name_and_unit(key: str) -> tuple[str, str]:
@@ -189,7 +195,7 @@ def _header(
     ]
     for fit in fits:
         lines.append(
-            f"# fit '{fit.name}': n = {fit.n_points}, R^2 = {fit.r_squared:.4f}, "
+            f"# fit '{fit.name}': n = {fit.n_points}, R^2 = {format_r_squared(fit.r_squared)}, "
             f"residual RMS = {fit.residual_rms:.4g} {fit.residual_unit}".rstrip()
         )
         for key, value, error in fit.rows():
