@@ -63,12 +63,27 @@ def _run(simulation, phases, folder_option: Path | None, kind: str, description:
     for key in ("simulated time [s]", "wall time [s]", "real-time factor", "air consumed [NL]",
                 "mean air flow [NL/min]", "tank endurance at this mean flow [s]"):
         console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
+    for name, phase in summary["phases"].items():
+        console.print(
+            f"  phase {name}: {phase['duration [s]']:.3g} s, air "
+            f"{phase['mean air flow [NL/min]']:.3g} NL/min, tank lasts "
+            f"{phase['tank endurance at this flow [s]'] / 60.0:.4g} min",
+            markup=False, highlight=False,
+        )
     for joint, error in summary["angle rmse [deg]"].items():
         if joint in leg_joints:
             console.print(f"  {joint} angle rmse [deg]: {error:.3g}", markup=False,
                           highlight=False)
     if summary.get("interrupted"):
         finish_run(folder, summary)
+
+
+def _check_environment(environment: str) -> None:
+    from pneumaquad.robot.environment import ENVIRONMENTS
+
+    if environment not in ENVIRONMENTS:
+        raise typer.BadParameter(f"{environment!r}: expected one of {', '.join(ENVIRONMENTS)}",
+                                 param_hint="--environment")
 
 
 def _render(folder: Path, fps: int = 30, width: int = 640, height: int = 480) -> None:
@@ -142,6 +157,9 @@ def robot_stand(
         bool, typer.Option("--posture/--no-posture", help="Body height/roll/pitch commands.")
     ] = True,
     environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
+    configuration: Annotated[
+        str, typer.Option(help="quadruped, or testbed (front legs, rear on wheels).")
+    ] = "quadruped",
     supply: Annotated[str | None, typer.Option(help="Override supply: ideal or tank.")] = None,
     seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
     params: RobotParamsOption = "crr-quadruped",
@@ -154,9 +172,14 @@ def robot_stand(
 
     if supply not in (None, "ideal", "tank"):
         raise typer.BadParameter(f"{supply!r}: expected ideal or tank", param_hint="--supply")
-    simulation = _simulation(params, overrides, "quadruped", environment, seed, supply)
+    if configuration not in ("quadruped", "testbed"):
+        raise typer.BadParameter(f"{configuration!r}: expected quadruped or testbed",
+                                 param_hint="--configuration")
+    _check_environment(environment)
+    simulation = _simulation(params, overrides, configuration, environment, seed, supply)
     phases = stand_up_phases(simulation, hold=hold, posture=posture)
-    _run(simulation, phases, output, "robot-stand", "quadruped: stand up and hold", video)
+    _run(simulation, phases, output, f"{configuration}-stand",
+         f"{configuration}: stand up and hold", video)
 
 
 @robot_app.command("export")
@@ -171,8 +194,14 @@ def robot_export(
     overrides: SetOption = None,
 ) -> None:
     """Write the MuJoCo model as MJCF (open it with `python -m mujoco.viewer`)."""
-    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.robot.builder import CONFIGURATIONS, build_robot
 
+    _check_environment(environment)
+    if configuration not in CONFIGURATIONS:
+        raise typer.BadParameter(
+            f"{configuration!r}: expected one of {', '.join(CONFIGURATIONS)}",
+            param_hint="--configuration",
+        )
     robot = build_robot(load_robot(params, overrides or []), configuration, environment, seed)
     path.write_text(robot.to_xml(), encoding="utf-8")
     console.print(f"wrote {path}")

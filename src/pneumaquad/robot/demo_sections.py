@@ -45,9 +45,9 @@ def _stand(folder: Path, report: Report) -> None:
         video_note = f" Video: robot-stand/{files.mp4.name}."
     except RenderingUnavailableError as error:
         video_note = f" (No video: {error})"
-    hold = run.summary["phases"]
+    phases = run.summary["phases"]
     t = recording["time [s]"]
-    holding = (t >= hold["hold"] + 1.0) & (t < hold["height up"])
+    holding = (t >= phases["hold"]["start [s]"] + 1.0) & (t < phases["height up"]["start [s]"])
     report.add(
         "Quadruped: standing up and holding posture",
         "The robot lies on the ground, tucks its feet in, pushes up on all 12 cylinders, "
@@ -61,7 +61,10 @@ def _stand(folder: Path, report: Report) -> None:
                 np.degrees(np.max(np.abs(recording["thorax roll [rad]"][holding])))),
             "air consumed [NL]": run.summary["air consumed [NL]"],
             "mean air flow [NL/min]": run.summary["mean air flow [NL/min]"],
-            "2 L / 200 bar tank lasts at that flow [min]":
+            "air flow while holding [NL/min]": phases["hold"]["mean air flow [NL/min]"],
+            "2 L / 200 bar tank lasts, holding [h]":
+                phases["hold"]["tank endurance at this flow [s]"] / 3600.0,
+            "2 L / 200 bar tank lasts, whole run's mean flow [min]":
                 run.summary["tank endurance at this mean flow [s]"] / 60.0,
             "real-time factor": run.summary["real-time factor"],
         },
@@ -98,6 +101,13 @@ def _foot_cycle(folder: Path, report: Report) -> None:
         for joint in joints:
             key = f"{joint.split('_')[-1]} rmse [deg], alpha gain x{scale:g}"
             figures[key] = run.summary["angle rmse [deg]"][joint]
+        if scale == 1.0:
+            for rate in ("slow", "medium", "fast"):
+                phase = run.summary["phases"][rate]
+                figures[f"{rate} cycle: air [NL/min]"] = phase["mean air flow [NL/min]"]
+                figures[f"{rate} cycle: 2 L / 200 bar tank lasts [h]"] = (
+                    phase["tank endurance at this flow [s]"] / 3600.0
+                )
     report.add(
         "Leg commands: the walking-like foot cycle (thesis 5.5.2.4, Fig. 44-45)",
         "The front-right foot goes rear-bottom → arc up → front-bottom → drag back at "

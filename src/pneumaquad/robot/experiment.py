@@ -176,6 +176,34 @@ def run_phases(
     return RobotRun(recording, summary, interrupted, wall, folder)
 
 
+def _phase_air(
+    simulation: RobotSimulation,
+    recording: dict[str, np.ndarray],
+    phase_starts: list[tuple[str, float]],
+    normal_litres_per_kg: float,
+) -> dict[str, dict[str, float]]:
+    """Start, duration, air and tank endurance of each phase (thesis 1.1 motivation)."""
+    times = recording["time [s]"]
+    air = recording["air consumed [kg]"]
+    end_time = float(times[-1])
+    phases = {}
+    bounds = [start for _, start in phase_starts[1:]] + [end_time]
+    for (name, start), end in zip(phase_starts, bounds, strict=True):
+        duration = end - start
+        if duration <= 0.0:
+            continue
+        used = float(np.interp(end, times, air) - np.interp(start, times, air))
+        flow = used / duration
+        phases[name] = {
+            "start [s]": start,
+            "duration [s]": duration,
+            "air consumed [NL]": used * normal_litres_per_kg,
+            "mean air flow [NL/min]": flow * normal_litres_per_kg * 60.0,
+            "tank endurance at this flow [s]": tank_endurance(simulation, flow),
+        }
+    return phases
+
+
 def _summary(
     simulation: RobotSimulation,
     recording: dict[str, np.ndarray],
@@ -205,7 +233,6 @@ def _summary(
         "simulated time [s]": simulated,
         "wall time [s]": wall,
         "real-time factor": simulated / wall if wall > 0 else math.nan,
-        "phases": {name: start for name, start in phase_starts},
         "air consumed [kg]": air,
         "air consumed [NL]": air * normal_litres_per_kg,
         "mean air flow [NL/min]": mean_flow * normal_litres_per_kg * 60.0,
@@ -215,6 +242,7 @@ def _summary(
         },
         "tank endurance at this mean flow [s]": tank_endurance(simulation, mean_flow),
     }
+    summary["phases"] = _phase_air(simulation, recording, phase_starts, normal_litres_per_kg)
     errors = {}
     for name, closed in zip(robot.joint_names, controlled, strict=True):
         reference = recording[f"{name} reference [rad]"]

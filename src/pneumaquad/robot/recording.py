@@ -73,24 +73,6 @@ def thorax_attitude(simulation: RobotSimulation) -> np.ndarray:
     return np.array([roll, pitch, yaw])
 
 
-def _foot_normal_forces(simulation: RobotSimulation) -> np.ndarray:
-    robot = simulation.robot
-    model, data = simulation.model, simulation.data
-    tibia_bodies = [
-        mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia") for leg in robot.legs
-    ]
-    forces = np.zeros(len(robot.legs))
-    wrench = np.zeros(6)
-    for index in range(data.ncon):
-        contact = data.contact[index]
-        bodies = (model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2])
-        for leg_index, body in enumerate(tibia_bodies):
-            if body in bodies:
-                mujoco.mj_contactForce(model, data, index, wrench)
-                forces[leg_index] += abs(wrench[0])
-    return forces
-
-
 def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> np.ndarray:
     """One recording row (layout of :func:`recording_columns`) of the current state."""
     s = simulation
@@ -111,7 +93,7 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
         ]
     ).ravel()
     thorax = np.concatenate([s.data.xpos[robot.thorax_id], thorax_attitude(s)])
-    feet = np.column_stack([s.foot_positions(), _foot_normal_forces(s)]).ravel()
+    feet = np.column_stack([s.foot_positions(), s.foot_normal_forces()]).ravel()
     air = s.air_consumed()
     normal_litres = air * s.params[0, P_R] * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
     supply = np.array([s.supply_pressure(), air, normal_litres])

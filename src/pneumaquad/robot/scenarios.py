@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 
 from .experiment import Phase
@@ -29,6 +30,7 @@ __all__ = [
     "TUCKED_ANGLES",
     "foot_cycle_phases",
     "leg_validation_phases",
+    "resting_height",
     "stand_up_phases",
     "standing_height",
 ]
@@ -189,6 +191,32 @@ def foot_cycle_phases(
     return phases
 
 
+def resting_height(simulation: RobotSimulation, angles: np.ndarray) -> float:
+    """Thorax height [m] at which the lowest robot geom just touches flat ground.
+
+    With the robot upright at its nominal attitude and the joints at ``angles`` [rad]:
+    the lowest point of every capsule/sphere/cylinder is found from its world pose.
+    """
+    model, data = simulation.model, simulation.data
+    probe = 1.0
+    simulation.set_pose(angles, thorax_position=np.array([0.0, 0.0, probe]))
+    lowest = probe
+    for geom in range(model.ngeom):
+        if model.geom_bodyid[geom] == 0:
+            continue
+        radius, half = model.geom_size[geom][0], model.geom_size[geom][1]
+        axis_z = abs(data.geom_xmat[geom].reshape(3, 3)[2, 2])
+        centre = data.geom_xpos[geom][2]
+        if model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CAPSULE:
+            low = centre - axis_z * half - radius
+        elif model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER:
+            low = centre - axis_z * half - radius * np.sqrt(max(0.0, 1.0 - axis_z**2))
+        else:
+            low = centre - radius
+        lowest = min(lowest, low)
+    return probe - lowest
+
+
 def standing_height(simulation: RobotSimulation, angles: np.ndarray) -> float:
     """Thorax height [m] that puts the feet of a leg pose on flat ground."""
     robot = simulation.robot
@@ -214,8 +242,8 @@ def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: f
     standing = np.tile(STANDING_ANGLES, len(legs))
     placement = robot.parameters.placement
     rotation = euler_zyx_matrix(placement.rotation_zyx)
-    radius = robot.parameters.thorax.diameter / 2
-    simulation.set_pose(lying, thorax_position=np.array([0.0, 0.0, radius + 0.002]))
+    height = resting_height(simulation, lying)
+    simulation.set_pose(lying, thorax_position=np.array([0.0, 0.0, height + 0.001]))
     closed = np.ones(count, dtype=bool)
 
     tucked = np.tile(TUCKED_ANGLES, len(legs))

@@ -61,7 +61,7 @@ from .coupling import (
 )
 from .stepping import MJ_STEP_ADDRESS, advance_chunk
 
-__all__ = ["RobotSimulation", "seal_friction_row"]
+__all__ = ["RobotSimulation", "seal_friction_row", "stance_swing_schedule"]
 
 GainSchedule = Callable[["RobotSimulation"], np.ndarray]
 
@@ -93,6 +93,20 @@ def seal_friction_row(actuator: ActuatorParameters) -> np.ndarray:
     else:
         row[F_VISCOUS] = f.damping_coefficient
     return row
+
+
+def stance_swing_schedule(
+    stance_scale: float, swing_scale: float, contact_force: float = 1.0
+) -> GainSchedule:
+    """A gain schedule: PID gains × ``stance_scale`` on legs whose foot carries more than
+    ``contact_force`` [N], × ``swing_scale`` on the others (evaluated between chunks)."""
+
+    def schedule(simulation: RobotSimulation) -> np.ndarray:
+        loaded = simulation.foot_normal_forces() > contact_force
+        per_leg = np.where(loaded, stance_scale, swing_scale)
+        return np.repeat(per_leg, 3)
+
+    return schedule
 
 
 def _gains(controller: JointControllerParameters, actuator: ActuatorParameters) -> np.ndarray:
@@ -165,8 +179,18 @@ class RobotSimulation:
         self.reference_positions = np.zeros(n)
         self.state = np.zeros((n, N_STATES))
         self.gain_schedule: GainSchedule | None = None
+        self._tibia_leg = {
+            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
+            for index, leg in enumerate(robot.legs)
+        }
+        controller = p.controller
+        if controller.stance_gain_scale != 1.0 or controller.swing_gain_scale != 1.0:
+            self.gain_schedule = stance_swing_schedule(
+                controller.stance_gain_scale, controller.swing_gain_scale
+            )
         self.steps_taken = 0
         self.set_pose(np.clip(np.zeros(n), robot.lower_limits(), robot.upper_limits()))
+        self.step(0)  # compile (or load from the cache) before any timing starts
 
     # --- state -----------------------------------------------------------------------
     @property
@@ -185,6 +209,20 @@ class RobotSimulation:
     def foot_positions(self) -> np.ndarray:
         """World positions of the feet [m], (legs, 3)."""
         return self.data.site_xpos[self.robot.foot_site_id].copy()
+
+    def foot_normal_forces(self) -> np.ndarray:
+        """Normal contact force on each foot (tibia) [N], summed over its contacts."""
+        model, data = self.model, self.data
+        forces = np.zeros(len(self.robot.legs))
+        wrench = np.zeros(6)
+        for index in range(data.ncon):
+            contact = data.contact[index]
+            for body in (model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2]):
+                leg = self._tibia_leg.get(int(body))
+                if leg is not None:
+                    mujoco.mj_contactForce(model, data, index, wrench)
+                    forces[leg] += abs(wrench[0])
+        return forces
 
     def air_consumed(self) -> float:
         """Air drawn from the supply since the start [kg]."""
