@@ -92,9 +92,9 @@ def control_loop(
         )  # fmt: skip
 
 
-def standing_simulation() -> RobotSimulation:
+def standing_simulation(overrides: list[str] | None = None) -> RobotSimulation:
     """The quadruped standing on flat ground, closed-loop, settled for 1 s."""
-    robot = build_robot(load_robot("crr-quadruped"), "quadruped", "flat")
+    robot = build_robot(load_robot("crr-quadruped", overrides or []), "quadruped", "flat")
     sim = RobotSimulation(robot)
     pose = np.tile(np.radians(POSTURE_DEG), len(robot.legs))
     sim.set_pose(pose)
@@ -208,11 +208,13 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=5000, help="control steps per repeat")
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--json", default=None, help="write the figures to this file")
+    parser.add_argument("--set", action="append", default=[], dest="overrides",
+                        help="parameter override, e.g. simulation.substeps=1")
     args = parser.parse_args()
     n = args.steps
 
     start = time.perf_counter()
-    sim = standing_simulation()  # includes compiling the stepping loop on first use
+    sim = standing_simulation(args.overrides)  # includes compiling the stepping loop on first use
     setup_s = time.perf_counter() - start
     dt = sim.control_step
     every = sim.robot.parameters.simulation.recording_every
