@@ -39,6 +39,8 @@ CONFIGURATIONS = ("quadruped", "fixed", "testbed")
 
 _ROBOT_CONTYPE, _ROBOT_CONAFFINITY = WORLD_CONAFFINITY, WORLD_CONTYPE
 _CYLINDER_RGBA = (0.75, 0.75, 0.78, 1.0)
+#: Time constant of the joint-limit (cylinder end stop) constraint [s].
+END_STOP_TIME_CONSTANT = 0.002
 #: Time constant of the seal's dry-friction constraint [s].
 SEAL_FRICTION_TIME_CONSTANT = 0.002
 
@@ -263,7 +265,7 @@ def _add_leg(
         _place(body, child_in_parent)
         joint = joint_frames[joint_name]
         child_frame = _matrix(joint.child_frame)
-        body.add_joint(
+        hinge = body.add_joint(
             name=f"{leg}_{joint_name}",
             type=mujoco.mjtJoint.mjJNT_HINGE,
             pos=list(child_frame[:3, 3]),
@@ -272,6 +274,11 @@ def _add_leg(
             limited=mujoco.mjtLimited.mjLIMITED_TRUE,
             damping=joint.damping,
         )
+        # The joint limits are the cylinder's end stops: a stiff limit constraint (time
+        # constant 2 ms) instead of MuJoCo's soft default, which let a cylinder pushing at
+        # full pressure overrun its limit by several degrees.
+        hinge.solref_limit = [max(END_STOP_TIME_CONSTANT, 2.0 * spec.option.timestep), 1.0]
+        hinge.solimp_limit = [0.99, 0.999, 0.001, 0.5, 2.0]
         if link_name == "coxa":
             first = _capsule(body, f"{leg}_coxa1", p.coxa1, np.eye(4), p.contact.body_friction,
                              contact_tc)

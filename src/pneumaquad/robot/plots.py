@@ -15,14 +15,21 @@ __all__ = ["plot_body", "plot_joints"]
 
 def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: Path,
                 title: str = "") -> Path:
-    """Per joint: reference vs actual angle [deg] above cap and rod pressure [psia]."""
+    """Per joint: reference vs actual angle [deg] above cap and rod pressure [psia].
+
+    The reference is drawn only while the joint is under closed-loop control.
+    """
     time = recording["time [s]"]
     fig, axes = plt.subplots(2, len(joints), figsize=(4.2 * len(joints), 5.6), sharex=True,
                              squeeze=False)
     for column, joint in enumerate(joints):
         angle_axis, pressure_axis = axes[0, column], axes[1, column]
-        angle_axis.plot(time, np.degrees(recording[f"{joint} reference [rad]"]), "k--",
-                        lw=1.0, label="reference")
+        reference = np.degrees(recording[f"{joint} reference [rad]"])
+        mode = recording.get(f"{joint} control mode [-]")
+        if mode is not None:
+            reference = np.where(mode == 1.0, reference, np.nan)
+        if np.any(np.isfinite(reference)):
+            angle_axis.plot(time, reference, "k--", lw=1.0, label="reference")
         angle_axis.plot(time, np.degrees(recording[f"{joint} angle [rad]"]), "C0", lw=1.2,
                         label="simulated")
         angle_axis.set_title(joint.replace("_", " "))

@@ -1,7 +1,9 @@
 """Recording rows of a robot run: per-joint, thorax, feet and supply columns (SI).
 
 Columns are named ``quantity [unit]``; per-joint columns start with the joint name
-(``"front_right_gamma angle [rad]"``), per-leg columns with the leg name.
+(``"front_right_gamma angle [rad]"``), per-leg columns with the leg name. A joint's
+``control mode [-]`` is 0 with its valve held at the offset, 1 under closed-loop control
+and 2 with an open-loop valve voltage.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from pneumaquad.layout import (
 )
 from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
 
+from .coupling import X_COMMANDED
 from .simulation import RobotSimulation
 
 __all__ = ["JOINT_QUANTITIES", "recording_columns", "recording_row", "thorax_attitude"]
@@ -35,6 +38,7 @@ JOINT_QUANTITIES = (
     "rod pressure [Pa]",
     "force [N]",
     "air consumed [kg]",
+    "control mode [-]",
 )
 _THORAX = ("thorax x [m]", "thorax y [m]", "thorax z [m]", "thorax roll [rad]",
            "thorax pitch [rad]", "thorax yaw [rad]")
@@ -90,6 +94,7 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
             s.state[:, S_ROD_PRESSURE],
             s.outputs[:, O_PNEUMATIC_FORCE],
             s.state[:, S_AIR_CONSUMED],
+            s.extra[:, X_COMMANDED],
         ]
     ).ravel()
     thorax = np.concatenate([s.data.xpos[robot.thorax_id], thorax_attitude(s)])
