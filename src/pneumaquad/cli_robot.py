@@ -58,6 +58,8 @@ def _run(simulation, phases, folder_option: Path | None, kind: str, description:
             plot_body(run.recording, robot.legs, folder / "body.png", description)
     if video:
         _render(folder)
+    else:
+        _first_frame(folder)
     summary = dict(run.summary)
     console.print(f"run folder: [bold]{folder}[/bold]")
     for key in ("simulated time [s]", "wall time [s]", "real-time factor", "air consumed [NL]",
@@ -84,6 +86,15 @@ def _check_environment(environment: str) -> None:
     if environment not in ENVIRONMENTS:
         raise typer.BadParameter(f"{environment!r}: expected one of {', '.join(ENVIRONMENTS)}",
                                  param_hint="--environment")
+
+
+def _first_frame(folder: Path) -> None:
+    from pneumaquad.robot.video import RenderingUnavailableError, render_first_frame
+
+    try:
+        render_first_frame(folder)
+    except RenderingUnavailableError as error:
+        console.print(f"[yellow]no first-frame.png: {error}[/yellow]")
 
 
 def _render(folder: Path, fps: int = 30, width: int = 640, height: int = 480) -> None:

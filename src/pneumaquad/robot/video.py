@@ -318,6 +318,45 @@ def write_first_frame_png(frame: np.ndarray, path: Path) -> Path:
     return path
 
 
+def _load_run(run_folder: Path, max_seconds: float | None = None):
+    """The run's model, times [s] and qpos, with the GL backend chosen before mujoco loads."""
+    model_path, trajectory_path = run_folder / MODEL_NAME, run_folder / TRAJECTORY_NAME
+    for required in (model_path, trajectory_path):
+        if not required.is_file():
+            raise MissingRunFileError(f"run video needs {required}, which does not exist")
+    with np.load(trajectory_path, allow_pickle=False) as archive:
+        missing = [key for key in ("time", "qpos") if key not in archive]
+        if missing:
+            raise VideoError(f"{trajectory_path} lacks the array(s) {', '.join(missing)}")
+        times, qpos = np.asarray(archive["time"], float), np.asarray(archive["qpos"], float)
+    if max_seconds is not None and len(times):
+        keep = times <= times[0] + max_seconds
+        times, qpos = times[keep], qpos[keep]
+    backend = select_gl_backend()  # before the first `import mujoco` of the process, if possible
+    try:
+        import mujoco
+    except Exception as error:  # a broken MUJOCO_GL makes the import itself fail
+        message = f"importing mujoco with MUJOCO_GL={backend} failed: {error!r}"
+        raise RenderingUnavailableError(message) from error
+
+    try:
+        model = mujoco.MjModel.from_xml_path(str(model_path))
+    except ValueError as error:
+        raise VideoError(f"cannot load {model_path}: {error}") from error
+    return model, times, qpos
+
+
+def render_first_frame(run_folder: Path, *, width: int = 640, height: int = 480) -> Path:
+    """Write only ``first-frame.png`` of a run folder (one rendered frame); returns its path.
+
+    Raises the same errors as :func:`render_run_video`.
+    """
+    model, times, qpos = _load_run(Path(run_folder))
+    frame = next(iter(render_frames(model, times[:1], qpos[:1], fps=1.0, width=width,
+                                    height=height)))
+    return write_first_frame_png(frame, Path(run_folder) / FIRST_FRAME_NAME)
+
+
 def render_run_video(
     run_folder: Path,
     *,
@@ -357,33 +396,10 @@ def render_run_video(
     RenderingUnavailableError
         If no offscreen OpenGL backend works.
     """
-    run_folder = Path(run_folder)
-    model_path, trajectory_path = run_folder / MODEL_NAME, run_folder / TRAJECTORY_NAME
-    for required in (model_path, trajectory_path):
-        if not required.is_file():
-            raise MissingRunFileError(f"run video needs {required}, which does not exist")
-    with np.load(trajectory_path, allow_pickle=False) as archive:
-        missing = [key for key in ("time", "qpos") if key not in archive]
-        if missing:
-            raise VideoError(f"{trajectory_path} lacks the array(s) {', '.join(missing)}")
-        times, qpos = np.asarray(archive["time"], float), np.asarray(archive["qpos"], float)
-    if max_seconds is not None and len(times):
-        keep = times <= times[0] + max_seconds
-        times, qpos = times[keep], qpos[keep]
-    backend = select_gl_backend()  # before the first `import mujoco` of the process, if possible
-    try:
-        import mujoco
-    except Exception as error:  # a broken MUJOCO_GL makes the import itself fail
-        message = f"importing mujoco with MUJOCO_GL={backend} failed: {error!r}"
-        raise RenderingUnavailableError(message) from error
-
-    try:
-        model = mujoco.MjModel.from_xml_path(str(model_path))
-    except ValueError as error:
-        raise VideoError(f"cannot load {model_path}: {error}") from error
+    model, times, qpos = _load_run(Path(run_folder), max_seconds)
     frames = render_frames(model, times, qpos, fps=fps, width=width, height=height)
 
-    folder = run_folder if output is None else Path(output)
+    folder = Path(run_folder) if output is None else Path(output)
     folder.mkdir(parents=True, exist_ok=True)
     gif_path = folder / GIF_NAME if gif else None
     files = VideoFiles(folder / MP4_NAME, gif_path, folder / FIRST_FRAME_NAME)

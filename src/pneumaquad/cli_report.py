@@ -1,0 +1,113 @@
+"""Command-line interface of the reports: ``pneumaquad report run`` and ``report cost-table``.
+
+A thin layer over :mod:`pneumaquad.reporting`. User errors (missing run folder, malformed
+parameter or measured-data files) print one message and exit with status 2. This module
+imports nothing from :mod:`pneumaquad.cli`, so that module can register ``report_app``
+without an import cycle.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from pneumaquad.measured import MeasuredDataError
+from pneumaquad.params import ParameterError
+from pneumaquad.reporting.run_folder import ReportError
+
+__all__ = ["REPORT_ERRORS", "report_app"]
+
+#: Exceptions that are the user's input problems: message and exit status 2.
+REPORT_ERRORS = (ReportError, ParameterError, MeasuredDataError)
+
+report_app = typer.Typer(
+    help="Reports: an HTML page (figures embedded) of a run folder, or the cost table.",
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+)
+console = Console(stderr=True)
+
+
+@contextmanager
+def _progress(label: str) -> Iterator[Callable[[int, int], None]]:
+    columns = (
+        TextColumn(label),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeElapsedColumn(),
+    )
+    with Progress(*columns, console=console, transient=True) as progress:
+        task = progress.add_task(label, total=None)
+
+        def update(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
+
+        yield update
+
+
+def _fail(error: Exception) -> None:
+    console.print("error:", style="bold red", end=" ")
+    console.print(str(error), highlight=False, markup=False, soft_wrap=True)
+    raise typer.Exit(2)
+
+
+@report_app.command("run")
+def report_run(
+    run: Annotated[Path, typer.Argument(help="Run folder of a rig or robot experiment.")],
+    measured: Annotated[
+        Path | None,
+        typer.Option("--measured", "-m", help="Measured recording (CSV or MAT), rig runs."),
+    ] = None,
+    mapping: Annotated[
+        Path | None,
+        typer.Option("--mapping", help="TOML column mapping of the measured recording."),
+    ] = None,
+    time_offset: Annotated[
+        float, typer.Option("--time-offset", help="Added to the measured time stamps [s].")
+    ] = 0.0,
+    output: Annotated[
+        Path | None, typer.Option("--output", "-o", help="Report folder (default RUN/report).")
+    ] = None,
+) -> None:
+    """Write report.html (self-contained) and the PNGs of a run folder."""
+    from pneumaquad.reporting.report import build_run_report
+
+    try:
+        with _progress("report") as update:
+            path = build_run_report(run, output, measured, mapping, time_offset, update)
+    except REPORT_ERRORS as error:
+        _fail(error)
+    console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)
+
+
+@report_app.command("cost-table")
+def report_cost_table(
+    output: Annotated[Path, typer.Option("--output", "-o", help="Report folder.")] = Path(
+        "runs/cost-table"
+    ),
+    params: Annotated[
+        str, typer.Option("--params", "-p", help="Rig parameter set name or TOML path.")
+    ] = "thesis-rig",
+    repeats: Annotated[int, typer.Option(min=2, help="Timed repeats per case.")] = 15,
+    duration: Annotated[
+        float, typer.Option(min=0.1, help="Simulated time per timed run [s].")
+    ] = 4.0,
+) -> None:
+    """Time the rig model with components simplified (thesis Table 3 analogue)."""
+    from pneumaquad.reporting.cost_report import cost_table_markdown, write_cost_table_report
+    from pneumaquad.reporting.cost_table import measure_cost_table
+
+    try:
+        with _progress("cost table") as update:
+            table = measure_cost_table(params, duration, repeats, progress=update)
+        path = write_cost_table_report(table, output)
+    except REPORT_ERRORS as error:
+        _fail(error)
+    typer.echo(cost_table_markdown(table))
+    console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)

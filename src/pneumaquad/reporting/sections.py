@@ -1,0 +1,270 @@
+"""Sections of a run report: each adds headings, tables and figures to an :class:`HtmlPage`.
+
+Figures are written as PNG files into the report folder and embedded in the page.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pneumaquad.analysis.compare import comparison_rows, comparison_to_markdown
+from pneumaquad.params import RigSetup, RobotParameters
+from pneumaquad.plotting import plot_rig_run
+from pneumaquad.robot.plots import plot_body, plot_joints
+
+from .comparison import (
+    MeasuredComparison,
+    comparison_table_rows,
+    plot_errors,
+    plot_measured_vs_simulated,
+)
+from .curve_plots import plot_area_curves, plot_friction_curves, plot_input_pressure_curves
+from .curves import group_equal
+from .html import HtmlPage
+from .parameters import actuator_rows, flatten_summary, rig_parameter_rows, robot_parameter_rows
+from .run_folder import RunFolder
+
+__all__ = [
+    "add_comparison",
+    "add_model_curves",
+    "add_parameters",
+    "add_summary",
+    "add_time_histories",
+    "commanded_joints",
+    "velocity_limit",
+]
+
+_PARAMETER_HEADERS = ("group", "parameter", "value (SI)", "unit", "thesis units")
+
+
+def add_parameters(page: HtmlPage, run: RunFolder) -> None:
+    """Key run parameters (and, for robots, one table per distinct actuator set)."""
+    page.heading("Run parameters")
+    page.paragraph(
+        "Key values of the resolved parameters.toml (SI; pressures absolute).", note=True
+    )
+    if isinstance(run.parameters, RigSetup):
+        page.table(_PARAMETER_HEADERS, rig_parameter_rows(run.parameters))
+        return
+    assert isinstance(run.parameters, RobotParameters)
+    page.table(
+        _PARAMETER_HEADERS,
+        robot_parameter_rows(run.parameters, run.summary, run.path / "model.xml"),
+    )
+    for labels, actuator in group_equal(run.actuators):
+        page.heading(f"Actuator of the {labels} joints ({actuator.meta.name})", level=3)
+        page.table(_PARAMETER_HEADERS, actuator_rows(actuator))
+
+
+def add_summary(page: HtmlPage, run: RunFolder) -> None:
+    """The metrics of summary.json as a two-column table (nested tables flattened)."""
+    page.heading("Metrics (summary.json)")
+    if not run.summary:
+        page.paragraph("No summary.json in the run folder.", note=True)
+        return
+    page.table(("metric", "value"), flatten_summary(run.summary), digits=6)
+
+
+def commanded_joints(run: RunFolder) -> list[str]:
+    """Joints under closed-loop control (keys of summary "angle rmse [deg]"); failing
+    that, joints whose reference moves; failing that, the front-right leg."""
+    controlled = run.summary.get("angle rmse [deg]")
+    if isinstance(controlled, dict) and controlled:
+        return [str(name) for name in controlled]
+    suffix = " reference [rad]"
+    moving = [
+        column.removesuffix(suffix)
+        for column, values in run.recording.items()
+        if column.endswith(suffix) and values.size and np.ptp(values) > 1e-9
+    ]
+    if moving:
+        return moving
+    return [
+        c.removesuffix(suffix)
+        for c in run.recording
+        if c.startswith("front_right") and c.endswith(suffix)
+    ]
+
+
+def add_time_histories(page: HtmlPage, run: RunFolder, folder: Path) -> None:
+    """Rig: position, pressures and command (Fig. 25–28). Robot: per commanded leg,
+    reference vs angle and both pressures (Fig. 38–45); the body when it is free."""
+    page.heading("Time histories")
+    recording = run.recording
+    if recording["time [s]"].size < 2:
+        page.paragraph("The recording has fewer than two samples: nothing to plot.", note=True)
+        return
+    if run.kind == "rig":
+        path = plot_rig_run(recording, folder / "rig.png", title=run.description)
+        page.figure(
+            path,
+            "Position (in), cap and rod pressures (psia) and valve command "
+            "(V) against time, as in thesis Fig. 25–28.",
+        )
+        return
+    joints = commanded_joints(run)
+    legs = list(dict.fromkeys(j.rsplit("_", 1)[0] for j in joints))
+    for leg in legs:
+        leg_joints = [j for j in joints if j.rsplit("_", 1)[0] == leg]
+        path = plot_joints(
+            recording,
+            leg_joints,
+            folder / f"joints-{leg}.png",
+            f"{run.description}: {leg.replace('_', ' ')}",
+        )
+        page.figure(
+            path,
+            f"{leg.replace('_', ' ')}: reference and simulated angle (deg), "
+            "cap and rod pressure (psia), as in thesis Fig. 38–45.",
+        )
+    feet = [
+        c.removesuffix(" foot normal force [N]")
+        for c in recording
+        if c.endswith(" foot normal force [N]")
+    ]
+    if run.summary.get("configuration") != "fixed" and "thorax z [m]" in recording and feet:
+        path = plot_body(recording, feet, folder / "body.png", run.description)
+        page.figure(path, "Thorax height, attitude, foot normal forces and air consumed.")
+    snapshot = run.path / "first-frame.png"
+    if snapshot.is_file():
+        page.figure(snapshot, "First frame of the run's video.")
+
+
+def velocity_limit(run: RunFolder, default: float = 0.3) -> float:
+    """Half width [m/s] of the friction plot: 1.2 × the largest recorded piston speed,
+    within 0.02–2 m/s; ``default`` without a velocity column."""
+    speeds = [
+        float(np.nanmax(np.abs(values)))
+        for column, values in run.recording.items()
+        if column.endswith("velocity [m/s]") and values.size
+    ]
+    speeds = [s for s in speeds if math.isfinite(s) and s > 0]
+    if not speeds:
+        return default
+    return float(np.clip(1.2 * max(speeds), 0.02, 2.0))
+
+
+def add_model_curves(page: HtmlPage, run: RunFolder, folder: Path) -> None:
+    """Friction law (Fig. 15–16), equivalent areas (Fig. 24), input pressures (Fig. 23)."""
+    page.heading("Model curves from the run's parameters")
+    if not run.actuators:
+        page.paragraph("No actuator parameters could be loaded.", note=True)
+        return
+    parameters = run.parameters
+    if isinstance(parameters, RobotParameters) and parameters.simulation.seal_friction == "mujoco":
+        page.paragraph(
+            "Seal friction of this run lives in MuJoCo's constraint solver (dry friction "
+            "with the Stribeck breakaway below); the curve is the actuator file's law.",
+            note=True,
+        )
+    limit = velocity_limit(run)
+    path = plot_friction_curves(run.actuators, folder / "friction.png", limit)
+    page.figure(
+        path,
+        "Friction force against piston velocity of the configured model "
+        "(thesis eq 4.2.1–4.2.6, Fig. 15–16); LuGre at steady state. Right: "
+        "zoom on the breakaway peak.",
+    )
+    path = plot_area_curves(run.actuators, folder / "valve-area.png")
+    page.figure(
+        path,
+        "Equivalent orifice area cd·A of each chamber's port against the "
+        "centered voltage, one polynomial per side of the offset (thesis "
+        "Fig. 24, App. B.1.2).",
+    )
+    path = plot_input_pressure_curves(run.actuators, folder / "input-pressure.png")
+    page.figure(
+        path,
+        "Steady-state input pressure seen by each port against the valve "
+        "command (thesis eq 4.2.7–4.2.11, Fig. 23).",
+    )
+
+
+def add_comparison(
+    page: HtmlPage,
+    run: RunFolder,
+    comparison: MeasuredComparison,
+    measured: dict[str, np.ndarray],
+    source: str,
+    folder: Path,
+) -> None:
+    """Measured vs simulated figures, the metric table and per-step figures."""
+    page.heading("Measured vs simulated")
+    page.paragraph(
+        f"Measured data: {source}. Time offset added to the measured time: "
+        f"{comparison.time_offset:g} s. RMSE % is of the stroke for position and "
+        "of the measured range for pressures; lag > 0 means the simulation "
+        "follows late."
+    )
+    path = plot_measured_vs_simulated(
+        run.recording,
+        measured,
+        folder / "measured-vs-simulated.png",
+        comparison.time_offset,
+        run.description,
+    )
+    page.figure(path, "Measured and simulated position (in) and pressures (psia).")
+    headers = (
+        "signal",
+        "unit",
+        "RMSE",
+        "RMSE [% of range]",
+        "max abs error",
+        "lag [s]",
+        "τ simulated [s]",
+        "τ measured [s]",
+    )
+    page.table(headers, comparison_table_rows(comparison.comparisons))
+    if comparison.step_time is not None:
+        page.paragraph(
+            f"τ: first-order fits (thesis eq 4.3.1) from the step at {comparison.step_time:g} s.",
+            note=True,
+        )
+    path = plot_errors(comparison, folder / "measured-error.png")
+    page.figure(path, "Simulated minus measured on the common time grid.")
+    if comparison.steps_simulated:
+        page.heading("Position figures per step", level=3)
+        page.paragraph(
+            "Steps found in the simulated reference (closed loop) or valve command "
+            "(open loop); the commands are in m or V accordingly.",
+            note=True,
+        )
+        labelled = [("simulated", row) for row in comparison.steps_simulated]
+        labelled += [("measured", row) for row in comparison.steps_measured]
+        labelled.sort(key=lambda item: (item[1].get("step", 0), item[0] != "simulated"))
+        keys = list(dict.fromkeys(k for _, row in labelled for k in row))
+        page.table(
+            ["data", *keys],
+            [[label, *(row.get(k, math.nan) for k in keys)] for label, row in labelled],
+        )
+    (folder / "comparison.md").write_text(
+        comparison_to_markdown(comparison.comparisons), encoding="utf-8"
+    )
+    document = {
+        "signals": comparison_rows(comparison.comparisons),
+        "steps simulated": comparison.steps_simulated,
+        "steps measured": comparison.steps_measured,
+        "time offset [s]": comparison.time_offset,
+        "source": source,
+    }
+    (folder / "comparison.json").write_text(
+        json.dumps(_jsonable(document), indent=2, allow_nan=False) + "\n", encoding="utf-8"
+    )
+
+
+def _jsonable(value: Any) -> Any:
+    """Plain JSON values: NaN/inf become null, numpy scalars plain numbers."""
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
