@@ -32,3 +32,5 @@ bench: setup
 	$(BIN)/python benchmarks/kernel_cost.py
 	$(BIN)/python benchmarks/rig_speed.py
 	$(BIN)/python benchmarks/cost_table.py
+	$(BIN)/python benchmarks/robot_speed.py
+	$(BIN)/pneumaquad report cost-table --output runs/bench-cost-table

@@ -104,11 +104,12 @@ def run_demo(folder: Path, progress: Callable[[int, int], None] | None = None) -
     """Run the demo experiments into ``folder`` and write the report; returns report.html."""
     folder.mkdir(parents=True, exist_ok=True)
     report = DemoReport(folder)
+    from pneumaquad.demo_reports import REPORT_SECTIONS
     from pneumaquad.robot.demo_sections import ROBOT_SECTIONS
 
     steps = [
         _open_loop_steps, _spacer, _tracking, _stiction, _reference_solver, _tank,
-        *ROBOT_SECTIONS,
+        *ROBOT_SECTIONS, *REPORT_SECTIONS,
     ]
     for index, experiment in enumerate(steps):
         experiment(folder, report)

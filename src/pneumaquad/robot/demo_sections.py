@@ -57,7 +57,7 @@ def _stand(folder: Path, report: Report) -> None:
         figure,
         {
             "standing thorax height [m]": float(np.mean(recording["thorax z [m]"][holding])),
-            "max |roll| while holding [deg]": float(
+            "largest roll while holding [deg]": float(
                 np.degrees(np.max(np.abs(recording["thorax roll [rad]"][holding])))),
             "air consumed [NL]": run.summary["air consumed [NL]"],
             "mean air flow [NL/min]": run.summary["mean air flow [NL/min]"],
