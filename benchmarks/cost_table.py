@@ -55,40 +55,7 @@ class Variant:
     note: str
 
 
-def linear_area_overrides(setup: RigSetup) -> tuple[str, ...]:
-    """Both ports' polynomials replaced by cd·(A_max·|u|/u_fs + A_leak) of the simple valve."""
-    valve = setup.actuator.valve
-    simple = valve.simple
-    out = []
-    for port in (1, 2):
-        cd = (
-            simple.cap_discharge_coefficient
-            if port == valve.cap_port
-            else simple.rod_discharge_coefficient
-        )
-        slope = cd * simple.max_area / simple.full_scale_voltage
-        leak = cd * simple.leak_area
-        out += [
-            f"valve.port{port}.area_positive=[0, 0, 0, {slope!r}, {leak!r}]",
-            f"valve.port{port}.area_negative=[0, 0, 0, {-slope!r}, {leak!r}]",
-        ]
-    return tuple(out)
-
-
-def plain_pressure_overrides(setup: RigSetup, width: float) -> tuple[str, ...]:
-    """Both ports' tanh cutoffs moved to ±width around the offset (a supply/exhaust step)."""
-    valve = setup.actuator.valve
-    out = []
-    for number, port in ((1, valve.port1), (2, valve.port2)):
-        sign = 1.0 if port.high_pressure_cutoff > port.low_pressure_cutoff else -1.0
-        out += [
-            f'valve.port{number}.high_pressure_cutoff="{sign * width!r} V"',
-            f'valve.port{number}.low_pressure_cutoff="{-sign * width!r} V"',
-        ]
-    return tuple(out)
-
-
-def variants(setup: RigSetup, width: float) -> list[Variant]:
+def variants() -> list[Variant]:
     return [
         Variant(
             "complete model",
@@ -116,17 +83,15 @@ def variants(setup: RigSetup, width: float) -> list[Variant]:
         ),
         Variant(
             "  simple equivalent area",
-            linear_area_overrides(setup),
+            ('valve.area_curve="linear"',),
             True,
-            "underlapped model, area polynomials overridden to the simple valve's "
-            "linear cd·A [0,0,0,±slope,leak]; tanh input pressures kept",
+            'valve.area_curve="linear": the simple valve\'s linear cd·A; tanh pressures kept',
         ),
         Variant(
             "  simple pressure estimates",
-            plain_pressure_overrides(setup, width),
+            ('valve.input_pressure="switched"',),
             True,
-            f"underlapped model, tanh cutoffs overridden to ±{width:g} V around the "
-            "offset (input pressure = supply or exhaust); polynomial areas kept",
+            'valve.input_pressure="switched": plain supply/exhaust; polynomial areas kept',
         ),
     ]
 
@@ -256,12 +221,6 @@ def main() -> None:
     parser.add_argument("--amplitude", type=float, default=0.4 * INCH, help="sine [m]")
     parser.add_argument("--frequency", type=float, default=0.5, help="sine [Hz]")
     parser.add_argument("--repeats", type=int, default=25)
-    parser.add_argument(
-        "--cutoff-width",
-        type=float,
-        default=1e-6,
-        help="half width of the 'plain pressure' tanh [V]",
-    )
     parser.add_argument("--json", default=None, help="write the figures to this file")
     args = parser.parse_args()
 
@@ -270,7 +229,7 @@ def main() -> None:
     reference = sine(
         base.actuator.cylinder.stroke / 2, args.amplitude, args.frequency, args.duration, dt
     )
-    cases = variants(base, args.cutoff_width)
+    cases = variants()
     setups = {v.name: load_rig("thesis-rig", overrides=list(v.overrides)) for v in cases}
     _, complete_rows = run_once(base, reference, True)  # warm-up + commands to replay
     replay = complete_rows[:, RIG_COLUMNS.index("command [V]")].copy()

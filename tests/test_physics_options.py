@@ -97,3 +97,39 @@ def test_heat_transfer_relaxes_closed_chamber_to_wall_temperature() -> None:
     expected = 298.0 + (hot - 298.0) * math.exp(-steps * DT / tau)
     assert temperature == pytest.approx(expected, rel=2e-3)
     assert 298.0 < temperature < hot
+
+
+def test_valve_parts_switch_separately() -> None:
+    """Thesis Table 3's ablations: ``area_curve="linear"`` gives the simple valve's slot area
+    with the tanh input pressures kept; ``input_pressure="switched"`` gives plain
+    supply/exhaust with the polynomial areas kept."""
+    from pneumaquad.actuator import pack_parameters
+    from pneumaquad.params import load_actuator
+    from pneumaquad.physics.valve import input_pressure, simple_valve_area
+    from pneumaquad.pneumatics import valve_connections
+
+    base = load_actuator("thesis-rig")
+    linear = load_actuator("thesis-rig", ['valve.area_curve="linear"'])
+    switched = load_actuator("thesis-rig", ['valve.input_pressure="switched"'])
+    supply = base.supply.supply_pressure
+    exhaust = base.supply.exhaust_pressure
+    simple = base.valve.simple
+    for centered in (-2.0, -0.3, 0.4, 3.0):
+        full = valve_connections(pack_parameters(base), centered, supply)
+        area_only = valve_connections(pack_parameters(linear), centered, supply)
+        pressure_only = valve_connections(pack_parameters(switched), centered, supply)
+        slot = simple_valve_area(
+            centered, simple.max_area, simple.leak_area, simple.full_scale_voltage
+        )
+        assert area_only[1] == pytest.approx(simple.cap_discharge_coefficient * slot)
+        assert area_only[3] == pytest.approx(simple.rod_discharge_coefficient * slot)
+        assert (area_only[0], area_only[2]) == (full[0], full[2])
+        cap_source = supply if centered >= 0 else exhaust
+        rod_source = exhaust if centered >= 0 else supply
+        assert (pressure_only[0], pressure_only[2]) == (cap_source, rod_source)
+        assert (pressure_only[1], pressure_only[3]) == (full[1], full[3])
+        port = base.valve.port2  # cap_port = 2
+        assert full[0] == pytest.approx(
+            input_pressure(centered, supply, exhaust, port.high_pressure_cutoff,
+                           port.low_pressure_cutoff)
+        )

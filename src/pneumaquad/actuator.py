@@ -37,6 +37,8 @@ THERMO_CODES = {
     "heat_transfer": THERMO_HEAT_TRANSFER,
 }
 VALVE_CODES = {"simple": layout.VALVE_SIMPLE, "underlapped": layout.VALVE_UNDERLAPPED}
+AREA_CURVE_CODES = {"polynomial": layout.AREA_POLYNOMIAL, "linear": layout.AREA_LINEAR}
+INPUT_PRESSURE_CODES = {"tanh": layout.INPUT_TANH, "switched": layout.INPUT_SWITCHED}
 FLOW_CODES = {"orifice": layout.FLOW_ORIFICE, "iso6358": layout.FLOW_ISO6358}
 
 
@@ -84,6 +86,8 @@ def pack_parameters(actuator: ActuatorParameters) -> np.ndarray:
     row[layout.P_BORE] = cylinder.bore
     row[layout.P_PISTON_MASS] = cylinder.piston_mass
     row[layout.P_VALVE_MODEL] = VALVE_CODES[valve.model]
+    row[layout.P_AREA_CURVE] = AREA_CURVE_CODES[valve.area_curve]
+    row[layout.P_INPUT_PRESSURE] = INPUT_PRESSURE_CODES[valve.input_pressure]
     row[layout.P_FLOW_FORM] = FLOW_CODES[valve.flow_form]
     row[layout.P_OFFSET] = valve.offset_voltage
     row[layout.P_UMIN] = valve.min_voltage

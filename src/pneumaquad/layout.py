@@ -66,12 +66,19 @@ P_GRAVITY_FORCE = 72  # weight along +x [N]
 P_STOP_STIFFNESS = 73  # [N/m]
 P_STOP_DAMPING = 74  # [N s/m]
 P_SPACER = 75  # 1.0 = piston fixed at full extension
-N_PARAMETERS = 76
+# underlapped valve sub-models (thesis 5.5.3 Table 3: the valve's two parts separately)
+P_AREA_CURVE = 76  # AREA_POLYNOMIAL / AREA_LINEAR
+P_INPUT_PRESSURE = 77  # INPUT_TANH / INPUT_SWITCHED
+N_PARAMETERS = 78
 
 VALVE_SIMPLE = 0
 VALVE_UNDERLAPPED = 1
 FLOW_ORIFICE = 0
 FLOW_ISO6358 = 1
+AREA_POLYNOMIAL = 0
+AREA_LINEAR = 1
+INPUT_TANH = 0
+INPUT_SWITCHED = 1
 
 # --- state -----------------------------------------------------------------------------
 S_CAP_PRESSURE = 0  # [Pa]

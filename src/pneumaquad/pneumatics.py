@@ -11,7 +11,9 @@ import math
 
 from pneumaquad.jit import compiled
 from pneumaquad.layout import (
+    AREA_LINEAR,
     FLOW_ISO6358,
+    INPUT_SWITCHED,
     N_OUTPUTS,
     O_CAP_FLOW,
     O_CAP_TEMPERATURE,
@@ -19,6 +21,7 @@ from pneumaquad.layout import (
     O_ROD_FLOW,
     O_ROD_TEMPERATURE,
     O_SUPPLY_DRAW,
+    P_AREA_CURVE,
     P_BORE,
     P_C1,
     P_C2,
@@ -40,6 +43,7 @@ from pneumaquad.layout import (
     P_FRICTION_MODEL,
     P_FS,
     P_HEAT_TRANSFER,
+    P_INPUT_PRESSURE,
     P_ISO_B,
     P_ISO_CONDUCTANCE,
     P_ISO_LEAK_CONDUCTANCE,
@@ -132,7 +136,9 @@ def valve_connections(p, centered: float, supply_pressure: float):
     conductance). Conductance is an effective area cd·A [m^2] for the orifice form and a
     sonic conductance [m^3/(s Pa)] for the ISO 6358 form. Simple valve: positive voltage
     connects the cap to supply and the rod to exhaust (thesis Fig. 18). Underlapped valve:
-    each port sees the tanh input pressure of eq 4.2.7 through its polynomial area.
+    each port sees the tanh input pressure of eq 4.2.7 through its polynomial area; either
+    part can be swapped for the simple valve's (``P_INPUT_PRESSURE`` switched supply/exhaust,
+    ``P_AREA_CURVE`` linear area), the separate rows of thesis Table 3.
     """
     exhaust = p[P_PE]
     iso = p[P_FLOW_FORM] == FLOW_ISO6358
@@ -150,18 +156,35 @@ def valve_connections(p, centered: float, supply_pressure: float):
         if centered >= 0.0:
             return supply_pressure, cap_conductance, exhaust, rod_conductance
         return exhaust, cap_conductance, supply_pressure, rod_conductance
-    cap_source = input_pressure(
-        centered, supply_pressure, exhaust, p[P_CAP_HIGH_CUTOFF], p[P_CAP_LOW_CUTOFF]
-    )
-    rod_source = input_pressure(
-        centered, supply_pressure, exhaust, p[P_ROD_HIGH_CUTOFF], p[P_ROD_LOW_CUTOFF]
-    )
-    cap_area = polynomial_area(
-        centered, p[P_CAP_POLY_NEG : P_CAP_POLY_NEG + 5], p[P_CAP_POLY_POS : P_CAP_POLY_POS + 5]
-    )
-    rod_area = polynomial_area(
-        centered, p[P_ROD_POLY_NEG : P_ROD_POLY_NEG + 5], p[P_ROD_POLY_POS : P_ROD_POLY_POS + 5]
-    )
+    if p[P_INPUT_PRESSURE] == INPUT_SWITCHED:
+        # the simple valve's plain supply/exhaust pressures (thesis Table 3 ablation)
+        if centered >= 0.0:
+            cap_source, rod_source = supply_pressure, exhaust
+        else:
+            cap_source, rod_source = exhaust, supply_pressure
+    else:
+        cap_source = input_pressure(
+            centered, supply_pressure, exhaust, p[P_CAP_HIGH_CUTOFF], p[P_CAP_LOW_CUTOFF]
+        )
+        rod_source = input_pressure(
+            centered, supply_pressure, exhaust, p[P_ROD_HIGH_CUTOFF], p[P_ROD_LOW_CUTOFF]
+        )
+    if p[P_AREA_CURVE] == AREA_LINEAR:
+        # the simple valve's linear slot area (thesis Table 3 ablation)
+        area = simple_valve_area(
+            centered, p[P_SIMPLE_MAX_AREA], p[P_SIMPLE_LEAK_AREA], p[P_SIMPLE_FULL_SCALE]
+        )
+        cap_area = p[P_CD_CAP] * area
+        rod_area = p[P_CD_ROD] * area
+    else:
+        cap_area = polynomial_area(
+            centered, p[P_CAP_POLY_NEG : P_CAP_POLY_NEG + 5],
+            p[P_CAP_POLY_POS : P_CAP_POLY_POS + 5],
+        )
+        rod_area = polynomial_area(
+            centered, p[P_ROD_POLY_NEG : P_ROD_POLY_NEG + 5],
+            p[P_ROD_POLY_POS : P_ROD_POLY_POS + 5],
+        )
     if iso:
         return (
             cap_source,

@@ -250,6 +250,8 @@ class ValveParameters(_Model):
 
     model: Literal["underlapped", "simple"]
     flow_form: Literal["orifice", "iso6358"]
+    area_curve: Literal["polynomial", "linear"] = "polynomial"
+    input_pressure: Literal["tanh", "switched"] = "tanh"
     offset_voltage: Voltage
     min_voltage: Voltage
     max_voltage: Voltage

@@ -168,8 +168,9 @@ def area_curves(valve: ValveParameters, voltage: ArrayLike | None = None) -> lis
     """Equivalent area of each chamber's port, per side of the offset (thesis Fig. 24).
 
     Underlapped valve: the port's polynomials (App. B.1.2 l.42–50), negative side for
-    u_c ≤ 0 and positive side for u_c > 0, clipped at zero. Simple valve: cd·(A_max·|u_c|
-    /u_fs + A_leak) with the cap and rod discharge coefficients (thesis Fig. 18).
+    u_c ≤ 0 and positive side for u_c > 0, clipped at zero. Simple valve (or
+    ``area_curve = "linear"``): cd·(A_max·|u_c|/u_fs + A_leak) with the cap and rod
+    discharge coefficients (thesis Fig. 18).
 
     Parameters
     ----------
@@ -186,7 +187,7 @@ def area_curves(valve: ValveParameters, voltage: ArrayLike | None = None) -> lis
     u = centered_voltage_range(valve) if voltage is None else np.asarray(voltage, dtype=float)
     sides = (("negative", u[u <= 0.0]), ("positive", u[u > 0.0]))
     curves = []
-    if valve.model == "simple":
+    if valve.model == "simple" or valve.area_curve == "linear":
         simple = valve.simple
         for chamber, cd in (
             ("cap", simple.cap_discharge_coefficient),
@@ -231,7 +232,7 @@ def input_pressure_curves(
     valve, supply = actuator.valve, actuator.supply
     u = centered_voltage_range(valve) if voltage is None else np.asarray(voltage, dtype=float)
     ps, pe = supply.supply_pressure, supply.exhaust_pressure
-    if valve.model == "simple":
+    if valve.model == "simple" or valve.input_pressure == "switched":
         cap = np.where(u >= 0.0, ps, pe)
         rod = np.where(u >= 0.0, pe, ps)
         nan = float("nan")
