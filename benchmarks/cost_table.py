@@ -4,9 +4,9 @@ Daepp (2011) timed the Simulink target (task execution time, TET) of a Gamma-joi
 with components removed one at a time. This script times ``run_rig_chunk`` (PID + rig
 kernel + recording row, the whole fixed-step loop of ``simulate_rig``) per 1 ms step for
 the same removals, all in one run and interleaved across repeats, and prints the thesis's
-own figures beside ours. A second table times the removed components in isolation, which
-is what a kernel variant without them could save (the parameter-override variants below
-still evaluate them).
+own figures beside ours (the measurement is :func:`pneumaquad.reporting.cost_table.
+measure_cost_table`, also behind ``pneumaquad report cost-table``). A second table times
+the removed components in isolation.
 
 Run: ``.venv/bin/python benchmarks/cost_table.py [--json out.json]``.
 """
@@ -15,114 +15,21 @@ from __future__ import annotations
 
 import argparse
 import time
-from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
 from _bench import machine_line, stats, table, write_json
 from pneumaquad import layout
-from pneumaquad.actuator import supply_state
-from pneumaquad.control.pid import N_CONTROLLER_STATES
 from pneumaquad.params import RigSetup, load_rig
 from pneumaquad.physics.friction import friction_damping
 from pneumaquad.physics.valve import input_pressure, polynomial_area, simple_valve_area
 from pneumaquad.pneumatics import friction_of
-from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
-from pneumaquad.rig.signals import sine
-from pneumaquad.rig.simulate import N_COLUMNS, RIG_COLUMNS, run_rig_chunk
+from pneumaquad.reporting.cost_report import cost_table_markdown
+from pneumaquad.reporting.cost_table import measure_cost_table
+from pneumaquad.rig.model import pack_rig_parameters
 
 INCH = 0.0254
-#: Thesis Table 3: case -> (average TET [1e-5 s], % reduction). The "no controller" row was
-#: an open-loop test against an open-loop complete model (3.7260); the others are closed
-#: loop against 3.7498. (The thesis prints the viscous row's change as -0.0424; its own
-#: TETs give -0.4243, matching the 11.3 %.)
-THESIS = {
-    "complete model": (3.7498, None),
-    "no controller": (3.6819, 1.2),
-    "viscous friction": (3.3255, 11.3),
-    "simple valve model": (2.8471, 24.1),
-    "  simple equivalent area": (3.2728, 12.7),
-    "  simple pressure estimates": (3.4525, 7.9),
-}
-
-
-@dataclass(frozen=True)
-class Variant:
-    name: str
-    overrides: tuple[str, ...]
-    closed_loop: bool
-    note: str
-
-
-def variants() -> list[Variant]:
-    return [
-        Variant(
-            "complete model",
-            (),
-            True,
-            "thesis-rig as shipped: PID, underlapped valve, Stribeck-tanh, adiabatic",
-        ),
-        Variant(
-            "no controller",
-            (),
-            False,
-            "open loop, replaying the PID commands recorded in the complete run",
-        ),
-        Variant(
-            "viscous friction",
-            ('friction.model="viscous"',),
-            True,
-            'friction.model="viscous" (b·v, b = friction.damping_coefficient)',
-        ),
-        Variant(
-            "simple valve model",
-            ('valve.model="simple"',),
-            True,
-            'valve.model="simple": linear area, plain supply/exhaust pressures',
-        ),
-        Variant(
-            "  simple equivalent area",
-            ('valve.area_curve="linear"',),
-            True,
-            'valve.area_curve="linear": the simple valve\'s linear cd·A; tanh pressures kept',
-        ),
-        Variant(
-            "  simple pressure estimates",
-            ('valve.input_pressure="switched"',),
-            True,
-            'valve.input_pressure="switched": plain supply/exhaust; polynomial areas kept',
-        ),
-    ]
-
-
-def run_once(setup: RigSetup, signal: np.ndarray, closed_loop: bool) -> tuple[float, np.ndarray]:
-    """One call of the compiled loop over the whole signal: (seconds, recorded rows)."""
-    params = pack_rig_parameters(setup)
-    state = rig_initial_state(setup, params)
-    supply = supply_state(setup.actuator)
-    gains = rig_controller_gains(setup)
-    controller = np.zeros(N_CONTROLLER_STATES)
-    rows = np.zeros((signal.shape[0], N_COLUMNS))
-    sim = setup.simulation
-    start = time.perf_counter()
-    run_rig_chunk(
-        params,
-        state,
-        supply,
-        gains,
-        controller,
-        closed_loop,
-        signal,
-        0,
-        signal.shape[0],
-        sim.control_step,
-        sim.substeps,
-        rows,
-    )
-    return time.perf_counter() - start, rows
-
-
 @njit(cache=False)
 def polynomial_loop(centered, negative, positive):
     total = 0.0
@@ -224,110 +131,33 @@ def main() -> None:
     parser.add_argument("--json", default=None, help="write the figures to this file")
     args = parser.parse_args()
 
-    base = load_rig("thesis-rig")
-    dt = base.simulation.control_step
-    reference = sine(
-        base.actuator.cylinder.stroke / 2, args.amplitude, args.frequency, args.duration, dt
+    cost = measure_cost_table(
+        "thesis-rig", args.duration, args.repeats, args.amplitude, args.frequency
     )
-    cases = variants()
-    setups = {v.name: load_rig("thesis-rig", overrides=list(v.overrides)) for v in cases}
-    _, complete_rows = run_once(base, reference, True)  # warm-up + commands to replay
-    replay = complete_rows[:, RIG_COLUMNS.index("command [V]")].copy()
-    signals = {v.name: reference if v.closed_loop else replay for v in cases}
-    position = RIG_COLUMNS.index("position [m]")
-    errors = {}
-    for v in cases:  # warm-up, and a sanity figure per case
-        _, rows = run_once(setups[v.name], signals[v.name], v.closed_loop)
-        if not np.all(np.isfinite(rows[:, position])):
-            raise FloatingPointError(f"{v.name}: position is not finite")
-        errors[v.name] = float(np.sqrt(np.mean((rows[:, position] - reference) ** 2)))
-    samples: dict[str, list[float]] = {v.name: [] for v in cases}
-    for _ in range(args.repeats):  # interleaved, so slow drifts hit every case alike
-        for v in cases:
-            seconds, _ = run_once(setups[v.name], signals[v.name], v.closed_loop)
-            samples[v.name].append(seconds / reference.shape[0] * 1e6)
-
     print(f"Table 3 on the rig kernel  ({machine_line()})")
     print(
         f"thesis-rig, closed-loop sine half stroke ± {args.amplitude / INCH:g} in at "
-        f"{args.frequency:g} Hz, {args.duration:g} s = {reference.shape[0]} steps of "
-        f"{dt * 1e3:g} ms, {base.simulation.substeps} substeps; mean, std and min over "
-        f"{args.repeats} interleaved repeats of the whole run\n"
+        f"{args.frequency:g} Hz, {args.duration:g} s of {cost.control_step * 1e3:g} ms steps, "
+        f"{cost.substeps} substeps; mean, std and min over {args.repeats} interleaved "
+        "repeats of the whole run (pneumaquad.reporting.cost_table)\n"
     )
-    complete = stats(samples["complete model"]).mean
-    complete_min = stats(samples["complete model"]).min
-    thesis_complete = THESIS["complete model"][0]
-    out_rows, figures = [], {}
-    for number, v in enumerate(cases, start=1):
-        s = stats(samples[v.name])
-        change = s.mean - complete
-        reduction = -100.0 * change / complete
-        min_reduction = 100.0 * (1.0 - s.min / complete_min)
-        thesis_tet, thesis_reduction = THESIS[v.name]
-        first = v.name == "complete model"
-        out_rows.append(
-            [
-                f"{v.name} [{number}]",
-                f"{s.mean:.3f}",
-                f"{s.std:.3f}",
-                f"{s.min:.3f}",
-                "-" if first else f"{change:+.3f}",
-                "-" if first else f"{reduction:.1f}",
-                "-" if first else f"{min_reduction:.1f}",
-                f"{thesis_tet * 10:.2f}",
-                "-" if thesis_reduction is None else f"{thesis_reduction}",
-                f"{errors[v.name] * 1e3:.3f}",
-            ]
-        )
-        figures[v.name] = {
-            "us_per_step": s,
-            "change_us": change,
-            "reduction_pct": reduction,
-            "reduction_of_minima_pct": min_reduction,
-            "thesis_tet_us": thesis_tet * 10,
-            "thesis_reduction_pct": thesis_reduction,
-            "rms_tracking_error_m": errors[v.name],
-            "overrides": v.overrides,
-            "how": v.note,
+    print(cost_table_markdown(cost))
+    print("\nHow each case was made:")
+    for row in cost.rows:
+        print(f"  {row.case}: {row.how}")
+    complete = cost.rows[0].mean_us
+    figures: dict[str, object] = {
+        row.case: {
+            "mean_us": row.mean_us,
+            "std_us": row.std_us,
+            "min_us": row.min_us,
+            "change_percent": row.change_percent,
+            "thesis_us": row.thesis_us,
         }
-    print(
-        table(
-            [
-                "case",
-                "mean µs/step",
-                "std",
-                "min",
-                "change [µs]",
-                "red. [%]",
-                "red. of min [%]",
-                "thesis TET [µs]",
-                "thesis red. [%]",
-                "RMS err [mm]",
-            ],
-            out_rows,
-        )
-    )
-    print(
-        f"\nthesis complete model (closed loop): {thesis_complete * 10:.2f} µs per step, "
-        "whole Simulink target, Gamma joint; ours: PID + rig kernel + recording row."
-    )
-    print(
-        "change and red. compare means, as the thesis did; red. of min compares the fastest\n"
-        "repeats, least disturbed by other load. Thesis [2] is its open-loop pair (3.7260 ->\n"
-        "3.6819); its printed change for [3] (-0.0424) is a slip for -0.4243 (11.3 %)."
-    )
-    print("How each case was made:")
-    for number, v in enumerate(cases, start=1):
-        print(f"  [{number}] {v.note}")
-    print(
-        "  [5], [6] are parameter overrides of the underlapped kernel, which still evaluates\n"
-        "      the polynomials and tanh: [5] removes no arithmetic (zeros cost as much as other\n"
-        "      coefficients), only changes flow regimes; in [6] tanh's argument is huge, and\n"
-        "      libm's tanh returns +-1 early (about 4x cheaper), so [6] removes most of the\n"
-        "      tanh cost plus regime effects. The next table times the pieces in isolation."
-    )
+        for row in cost.rows
+    }
 
-    parts = component_costs(base, args.repeats)
+    parts = component_costs(load_rig("thesis-rig"), args.repeats)
     part_rows = []
     for name, full, simpler, per_step in parts:
         saving = (full - simpler) * per_step / 1e3

@@ -50,6 +50,25 @@ def pid_gains(
     return gains
 
 
+def controller_gains(controller, valve) -> np.ndarray:
+    """:func:`pid_gains` from a controller table and a valve table of a parameter set.
+
+    ``controller`` has ``proportional_gain``, ``integral_gain``, ``derivative_gain``,
+    ``derivative_filter_time_constant`` and ``integral_limit``; ``valve`` has
+    ``offset_voltage``, ``min_voltage`` and ``max_voltage`` (SI).
+    """
+    return pid_gains(
+        controller.proportional_gain,
+        controller.integral_gain,
+        controller.derivative_gain,
+        controller.derivative_filter_time_constant,
+        controller.integral_limit,
+        valve.offset_voltage,
+        valve.min_voltage,
+        valve.max_voltage,
+    )
+
+
 @compiled
 def pid_update(gains, state, reference: float, measurement: float, sample_time: float) -> float:
     """One controller sample.

@@ -4,7 +4,7 @@ import numpy as np
 
 from pneumaquad import layout
 from pneumaquad.actuator import initial_state, pack_parameters
-from pneumaquad.control.pid import pid_gains
+from pneumaquad.control.pid import controller_gains
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.physics.force import gravity_force
 
@@ -36,14 +36,4 @@ def rig_initial_state(setup: RigSetup, params: np.ndarray) -> np.ndarray:
 
 def rig_controller_gains(setup: RigSetup) -> np.ndarray:
     """PID gains of the rig's parameter file, with the valve's offset and range."""
-    controller, valve = setup.controller, setup.actuator.valve
-    return pid_gains(
-        controller.proportional_gain,
-        controller.integral_gain,
-        controller.derivative_gain,
-        controller.derivative_filter_time_constant,
-        controller.integral_limit,
-        valve.offset_voltage,
-        valve.min_voltage,
-        valve.max_voltage,
-    )
+    return controller_gains(setup.controller, setup.actuator.valve)

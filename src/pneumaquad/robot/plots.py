@@ -40,16 +40,7 @@ def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: P
                            lw=1.0, label="rod")
         pressure_axis.set_ylabel("Pressure (psia)")
         pressure_axis.set_xlabel("Time (s)")
-        for axis in (angle_axis, pressure_axis):
-            axis.grid(True, alpha=0.35)
-            axis.legend(loc="best", fontsize="small", framealpha=0.85)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=DPI)
-    plt.close(fig)
-    return path
+    return _save(fig, axes.ravel(), path, title)
 
 
 def plot_body(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
@@ -69,6 +60,10 @@ def plot_body(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
     axes[3].plot(time, recording["air consumed [NL]"], "C4")
     axes[3].set_ylabel("Air consumed (NL)")
     axes[3].set_xlabel("Time (s)")
+    return _save(fig, axes, path, title)
+
+
+def _save(fig, axes, path: Path, title: str) -> Path:
     for axis in axes:
         axis.grid(True, alpha=0.35)
         if axis.get_legend_handles_labels()[0]:

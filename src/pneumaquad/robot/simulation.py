@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from pneumaquad.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.control.pid import N_CONTROLLER_STATES, pid_gains
+from pneumaquad.control.pid import N_CONTROLLER_STATES, controller_gains
 from pneumaquad.layout import (
     N_OUTPUTS,
     N_STATES,
@@ -35,7 +35,6 @@ from pneumaquad.layout import (
     SUPPLY_TANK_PRESSURE,
 )
 from pneumaquad.params import ActuatorParameters
-from pneumaquad.params.robot_schema import JointControllerParameters
 
 from .builder import RobotModel
 from .coupling import (
@@ -109,17 +108,6 @@ def stance_swing_schedule(
     return schedule
 
 
-def _gains(controller: JointControllerParameters, actuator: ActuatorParameters) -> np.ndarray:
-    return pid_gains(
-        controller.proportional_gain,
-        controller.integral_gain,
-        controller.derivative_gain,
-        controller.derivative_filter_time_constant,
-        controller.integral_limit,
-        actuator.valve.offset_voltage,
-        actuator.valve.min_voltage,
-        actuator.valve.max_voltage,
-    )
 
 
 class RobotSimulation:
@@ -162,7 +150,9 @@ class RobotSimulation:
             self.linkage[i, L_DIRECTION] = link.direction
         self.seal = np.array([seal_friction_row(a) for a in actuators])
         controllers = [getattr(p.controller, t) for t in robot.joint_types]
-        self.gains = np.array([_gains(c, a) for c, a in zip(controllers, actuators, strict=True)])
+        self.gains = np.array(
+            [controller_gains(c, a.valve) for c, a in zip(controllers, actuators, strict=True)]
+        )
         self.base_gain_scale = np.array([c.gain_scale for c in controllers])
         self.gain_scale = self.base_gain_scale.copy()
         self.extra = np.zeros((n, N_EXTRA))
