@@ -1,8 +1,9 @@
-"""Command-line interface of the reports: ``pneumaquad report run`` and ``report cost-table``.
+"""Command-line interface of the reports: ``pneumaquad report RUN [--measured DATA]`` and
+``pneumaquad report --cost-table``.
 
 A thin layer over :mod:`pneumaquad.reporting`. User errors (missing run folder, malformed
 parameter or measured-data files) print one message and exit with status 2. This module
-imports nothing from :mod:`pneumaquad.cli`, so that module can register ``report_app``
+imports nothing from :mod:`pneumaquad.cli`, so that module can register ``report_command``
 without an import cycle.
 """
 
@@ -21,16 +22,11 @@ from pneumaquad.measured import MeasuredDataError
 from pneumaquad.params import ParameterError
 from pneumaquad.reporting.run_folder import ReportError
 
-__all__ = ["REPORT_ERRORS", "report_app"]
+__all__ = ["REPORT_ERRORS", "report_command"]
 
 #: Exceptions that are the user's input problems: message and exit status 2.
 REPORT_ERRORS = (ReportError, ParameterError, MeasuredDataError)
 
-report_app = typer.Typer(
-    help="Reports: an HTML page (figures embedded) of a run folder, or the cost table.",
-    no_args_is_help=True,
-    pretty_exceptions_enable=False,
-)
 console = Console(stderr=True)
 
 
@@ -57,9 +53,10 @@ def _fail(error: Exception) -> None:
     raise typer.Exit(2)
 
 
-@report_app.command("run")
-def report_run(
-    run: Annotated[Path, typer.Argument(help="Run folder of a rig or robot experiment.")],
+def report_command(
+    run: Annotated[
+        Path | None, typer.Argument(help="Run folder of a rig or robot experiment.")
+    ] = None,
     measured: Annotated[
         Path | None,
         typer.Option("--measured", "-m", help="Measured recording (CSV or MAT), rig runs."),
@@ -72,10 +69,31 @@ def report_run(
         float, typer.Option("--time-offset", help="Added to the measured time stamps [s].")
     ] = 0.0,
     output: Annotated[
-        Path | None, typer.Option("--output", "-o", help="Report folder (default RUN/report).")
+        Path | None,
+        typer.Option("--output", "-o", help="Report folder (default RUN/report, or "
+                     "runs/cost-table with --cost-table)."),
     ] = None,
+    cost_table: Annotated[
+        bool,
+        typer.Option("--cost-table", help="Instead of a run: time the rig model with "
+                     "components simplified (thesis Table 3) and report that."),
+    ] = False,
+    params: Annotated[
+        str, typer.Option("--params", "-p", help="Rig parameter set for --cost-table.")
+    ] = "thesis-rig",
+    repeats: Annotated[int, typer.Option(min=2, help="--cost-table: timed repeats.")] = 15,
+    duration: Annotated[
+        float, typer.Option(min=0.1, help="--cost-table: simulated time per run [s].")
+    ] = 4.0,
 ) -> None:
-    """Write report.html (self-contained) and the PNGs of a run folder."""
+    """Write report.html (self-contained, figures embedded) and the PNGs of a run folder,
+    optionally compared with a measured recording; or, with --cost-table, the thesis's
+    Table 3 measured on this machine."""
+    if cost_table:
+        _cost_table(output or Path("runs/cost-table"), params, repeats, duration)
+        return
+    if run is None:
+        _fail(ValueError("give a run folder, or --cost-table"))
     from pneumaquad.reporting.report import build_run_report
 
     try:
@@ -86,20 +104,7 @@ def report_run(
     console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)
 
 
-@report_app.command("cost-table")
-def report_cost_table(
-    output: Annotated[Path, typer.Option("--output", "-o", help="Report folder.")] = Path(
-        "runs/cost-table"
-    ),
-    params: Annotated[
-        str, typer.Option("--params", "-p", help="Rig parameter set name or TOML path.")
-    ] = "thesis-rig",
-    repeats: Annotated[int, typer.Option(min=2, help="Timed repeats per case.")] = 15,
-    duration: Annotated[
-        float, typer.Option(min=0.1, help="Simulated time per timed run [s].")
-    ] = 4.0,
-) -> None:
-    """Time the rig model with components simplified (thesis Table 3 analogue)."""
+def _cost_table(output: Path, params: str, repeats: int, duration: float) -> None:
     from pneumaquad.reporting.cost_report import cost_table_markdown, write_cost_table_report
     from pneumaquad.reporting.cost_table import measure_cost_table
 

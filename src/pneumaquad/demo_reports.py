@@ -79,7 +79,7 @@ def _measured_comparison(folder: Path, report: Report) -> None:
         "The closed-loop step train compared with 'measured' data: the same experiment "
         "simulated with LuGre friction, 20 µm and 0.3 kPa noise and a 20 ms delay, written "
         "as a lab CSV in ms, inches and psig with a column mapping (lab-data/), imported and "
-        "aligned by `pneumaquad report run step-train --measured ... --mapping ...`. The "
+        "aligned by `pneumaquad report step-train --measured ... --mapping ...`. The "
         "lag comes back as −0.02 s (the simulation leads).",
         page.parent / "measured-vs-simulated.png",
         figures,
@@ -90,7 +90,7 @@ def _robot_report(folder: Path, report: Report) -> None:
     page = build_run_report(folder / "robot-stand")
     report.add(
         "Report of a robot run",
-        "`pneumaquad report run robot-stand`: parameters, metrics, joint and body plots, "
+        "`pneumaquad report robot-stand`: parameters, metrics, joint and body plots, "
         "the actuators' friction, valve-area and input-pressure curves.",
         page.parent / "valve-area.png",
         {"report": str(page.relative_to(folder))},

@@ -1,4 +1,4 @@
-"""``report run`` / ``report cost-table``: exit 0 on good input, 2 with a message otherwise."""
+"""``report RUN`` / ``report --cost-table``: exit 0 on good input, 2 with a message otherwise."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from pneumaquad.cli_report import report_app
+from pneumaquad.cli import app
 from pneumaquad.recording import read_recording
 
 from .conftest import write_measured_csv
@@ -17,7 +17,7 @@ runner = CliRunner()
 
 def test_report_run_writes_the_report(rig_run: Path, tmp_path: Path) -> None:
     out = tmp_path / "report"
-    result = runner.invoke(report_app, ["run", str(rig_run), "-o", str(out)])
+    result = runner.invoke(app, ["report", str(rig_run), "-o", str(out)])
     assert result.exit_code == 0, result.output
     assert (out / "report.html").is_file()
     assert str(out / "report.html") in result.output.replace("\n", "")
@@ -27,9 +27,9 @@ def test_report_run_with_measured_data(rig_run: Path, tmp_path: Path) -> None:
     csv, mapping = write_measured_csv(read_recording(rig_run), tmp_path / "lab", shift=0.01)
     out = tmp_path / "report"
     result = runner.invoke(
-        report_app,
+        app,
         [
-            "run",
+            "report",
             str(rig_run),
             "--measured",
             str(csv),
@@ -47,7 +47,7 @@ def test_report_run_with_measured_data(rig_run: Path, tmp_path: Path) -> None:
 
 def test_missing_folder_exits_2_naming_it(tmp_path: Path) -> None:
     missing = tmp_path / "no-such-run"
-    result = runner.invoke(report_app, ["run", str(missing)])
+    result = runner.invoke(app, ["report", str(missing)])
     assert result.exit_code == 2
     assert str(missing) in result.output.replace("\n", "")
     assert "Traceback" not in result.output
@@ -68,9 +68,9 @@ def test_bad_files_exit_2(rig_run: Path, tmp_path: Path, problem: str) -> None:
         mapping.write_text('[columns]\ntime = { source = "t_ms", unit = "furlong" }\n')
         expected = "furlong"
     result = runner.invoke(
-        report_app,
+        app,
         [
-            "run",
+            "report",
             str(run),
             "--measured",
             str(csv),
@@ -86,7 +86,7 @@ def test_bad_files_exit_2(rig_run: Path, tmp_path: Path, problem: str) -> None:
 
 
 def test_measured_without_mapping_exits_2(rig_run: Path, tmp_path: Path) -> None:
-    result = runner.invoke(report_app, ["run", str(rig_run), "--measured", "x.csv"])
+    result = runner.invoke(app, ["report", str(rig_run), "--measured", "x.csv"])
     assert result.exit_code == 2
     assert "--mapping" in result.output
 
@@ -94,7 +94,8 @@ def test_measured_without_mapping_exits_2(rig_run: Path, tmp_path: Path) -> None
 def test_cost_table_command(tmp_path: Path) -> None:
     out = tmp_path / "cost"
     result = runner.invoke(
-        report_app, ["cost-table", "-o", str(out), "--repeats", "2", "--duration", "0.2"]
+        app,
+        ["report", "--cost-table", "-o", str(out), "--repeats", "2", "--duration", "0.2"],
     )
     assert result.exit_code == 0, result.output
     assert "simple valve: pressure part only" in result.output

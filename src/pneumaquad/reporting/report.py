@@ -1,6 +1,6 @@
 """The run report: one self-contained ``report.html`` (figures embedded) plus the PNGs.
 
-:func:`build_run_report` is the entry point of ``pneumaquad report run``;
+:func:`build_run_report` is the entry point of ``pneumaquad report``;
 :func:`write_run_report` does the work on already loaded inputs.
 """
 
