@@ -110,9 +110,11 @@ def _render(folder: Path, fps: int = 30, width: int = 640, height: int = 480) ->
 
 @leg_app.command("validate")
 def leg_validate(
-    joint: Annotated[str, typer.Option(help="Tested joint: alpha, beta or gamma.")] = "gamma",
+    joint: Annotated[
+        str, typer.Option(help="Tested joint: alpha, beta, gamma, or all.")
+    ] = "gamma",
     signal: Annotated[
-        str, typer.Option(help="steps, trapezoid, slow-sine or fast-sine.")
+        str, typer.Option(help="steps, trapezoid, slow-sine, fast-sine, or all.")
     ] = "steps",
     settle: Annotated[float, typer.Option(help="Open-loop extension phase [s].")] = 2.0,
     params: RobotParamsOption = "crr-quadruped",
@@ -120,19 +122,31 @@ def leg_validate(
     output: OutputOption = None,
     video: VideoOption = False,
 ) -> None:
-    """Thesis 5.5.2: one joint of the front-right leg follows a test signal."""
+    """Thesis 5.5.2: one joint of the front-right leg follows a test signal.
+
+    With ``all`` for the joint and/or the signal, every combination runs, each in its own
+    sub-folder of the output folder (``<joint>-<signal>``).
+    """
+    from pneumaquad.recording import create_run_folder
     from pneumaquad.robot.scenarios import LEG_SIGNALS, leg_validation_phases
 
-    if joint not in JOINT_NAMES:
-        raise typer.BadParameter(f"{joint!r}: expected one of {', '.join(JOINT_NAMES)}",
+    if joint not in (*JOINT_NAMES, "all"):
+        raise typer.BadParameter(f"{joint!r}: expected one of {', '.join(JOINT_NAMES)} or all",
                                  param_hint="--joint")
-    if signal not in LEG_SIGNALS:
-        raise typer.BadParameter(f"{signal!r}: expected one of {', '.join(LEG_SIGNALS)}",
+    if signal not in (*LEG_SIGNALS, "all"):
+        raise typer.BadParameter(f"{signal!r}: expected one of {', '.join(LEG_SIGNALS)} or all",
                                  param_hint="--signal")
-    simulation = _simulation(params, overrides, "fixed")
-    phases = leg_validation_phases(simulation, joint, signal, settle)
-    _run(simulation, phases, output, f"leg-{joint}-{signal}",
-         f"front-right {joint}: {signal}", video)
+    joints = JOINT_NAMES if joint == "all" else (joint,)
+    signals = LEG_SIGNALS if signal == "all" else (signal,)
+    several = len(joints) * len(signals) > 1
+    base = create_run_folder(output, f"leg-{joint}-{signal}") if several else output
+    for tested in joints:
+        for kind in signals:
+            simulation = _simulation(params, overrides, "fixed")
+            phases = leg_validation_phases(simulation, tested, kind, settle)
+            folder = base / f"{tested}-{kind}" if several else output
+            _run(simulation, phases, folder, f"leg-{tested}-{kind}",
+                 f"front-right {tested}: {kind}", video)
 
 
 @leg_app.command("foot-cycle")
