@@ -29,6 +29,7 @@ from pneumaquad.rig import signals
 from pneumaquad.rig.experiment import run_rig_experiment
 from pneumaquad.rig.signals import RecordedReferenceError
 from pneumaquad.rig.simulate import ReferenceSolverError
+from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.video import VideoError
 
 USER_ERRORS = (ParameterError, RecordedReferenceError, ReferenceSolverError)
@@ -361,7 +362,7 @@ def main() -> None:
     """Entry point: run the app; user errors print a message and exit with status 2."""
     try:
         app()
-    except (*USER_ERRORS, VideoError) as error:
+    except (*USER_ERRORS, VideoError, SimulationDivergedError) as error:
         console.print("error:", style="bold red", end=" ")
         console.print(str(error), highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)

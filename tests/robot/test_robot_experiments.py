@@ -198,3 +198,24 @@ def test_ctrl_c_keeps_the_robot_recording(tmp_path: Path) -> None:
     assert recording["time [s]"].size == read_recording(csv)["time [s]"].size > 10
     assert np.all(np.isfinite(recording["thorax z [m]"]))
     assert np.load(out / "trajectory.npz")["time"].size == recording["time [s]"].size
+
+
+def test_a_diverging_run_stops_with_a_clear_error_and_keeps_its_recording(
+    tmp_path: Path,
+) -> None:
+    """30 ms steps, explicit Euler and massless pistons blow up: MuJoCo would silently reset
+    the state; we stop, name the time window and keep what was recorded before."""
+    from pneumaquad.robot.simulation import SimulationDivergedError
+
+    overrides = [
+        'simulation.control_step="30 ms"',
+        'simulation.integrator="euler"',
+        *(f'linkages.{joint}.moving_mass="0 kg"' for joint in ("alpha", "beta", "gamma")),
+    ]
+    sim = _simulation("fixed", *overrides)
+    phases = leg_validation_phases(sim, "gamma", "fast-sine", settle=0.5)
+    with pytest.raises(SimulationDivergedError, match="diverged between t ="):
+        run_phases(sim, phases, tmp_path, "diverging")
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert "diverged" in summary["error"]
+    assert read_recording(tmp_path / "recording.csv")["time [s]"].size >= 1

@@ -33,7 +33,7 @@ from pneumaquad.recording import RunRecorder, write_summary
 
 from .coupling import MODE_CLOSED_LOOP, MODE_OPEN_LOOP, MODE_UNCOMMANDED, X_COMMANDED
 from .recording import recording_columns, recording_row
-from .simulation import RobotSimulation
+from .simulation import RobotSimulation, SimulationDivergedError
 
 __all__ = ["Phase", "RobotRun", "run_phases", "tank_endurance"]
 
@@ -135,35 +135,39 @@ def run_phases(
     columns = recording_columns(simulation)
     phase_starts = []
     controlled = np.zeros(count, dtype=bool)
+    failure: Exception | None = None
     with RunRecorder(folder, columns) as recorder, deferred_interrupt() as stop:
         recorder.append(recording_row(simulation, simulation.reference_angles))
         times.append(simulation.time)
         qpos.append(simulation.data.qpos.copy())
-        for phase in phases:
-            phase_starts.append((phase.name, simulation.time))
-            controlled |= np.asarray(phase.closed_loop, dtype=bool)
-            modes = phase.modes()
-            voltages = phase.open_loop_voltage
-            steps = round(phase.duration / dt)
-            table = _reference_table(phase, simulation.time, steps, dt, count)
-            simulation.extra[:, X_COMMANDED] = modes
-            if voltages is not None:
-                simulation.open_loop_voltage[:] = np.where(
-                    np.isfinite(voltages), voltages, simulation.open_loop_voltage
-                )
-            done = 0
-            while done < steps and not stop.requested:
-                chunk = min(every, steps - done)
-                simulation.step(chunk, table, done)
-                done += chunk
-                recorder.append(recording_row(simulation, table[done - 1]))
-                times.append(simulation.time)
-                qpos.append(simulation.data.qpos.copy())
-                if progress is not None and done % (every * 20) == 0:
-                    progress(simulation.time, total)
-            if stop.requested:
-                interrupted = True
-                break
+        try:
+            for phase in phases:
+                phase_starts.append((phase.name, simulation.time))
+                controlled |= np.asarray(phase.closed_loop, dtype=bool)
+                modes = phase.modes()
+                voltages = phase.open_loop_voltage
+                steps = round(phase.duration / dt)
+                table = _reference_table(phase, simulation.time, steps, dt, count)
+                simulation.extra[:, X_COMMANDED] = modes
+                if voltages is not None:
+                    simulation.open_loop_voltage[:] = np.where(
+                        np.isfinite(voltages), voltages, simulation.open_loop_voltage
+                    )
+                done = 0
+                while done < steps and not stop.requested:
+                    chunk = min(every, steps - done)
+                    simulation.step(chunk, table, done)
+                    done += chunk
+                    recorder.append(recording_row(simulation, table[done - 1]))
+                    times.append(simulation.time)
+                    qpos.append(simulation.data.qpos.copy())
+                    if progress is not None and done % (every * 20) == 0:
+                        progress(simulation.time, total)
+                if stop.requested:
+                    interrupted = True
+                    break
+        except SimulationDivergedError as error:
+            failure = error  # keep what was recorded before it; re-raised below
         recording = recorder.to_arrays()
     wall = time.perf_counter() - started
     np.savez(folder / "trajectory.npz", time=np.array(times), qpos=np.array(qpos))
@@ -172,7 +176,11 @@ def run_phases(
     )
     if extra_summary:
         summary.update(extra_summary)
+    if failure is not None:
+        summary["error"] = str(failure)
     write_summary(folder, summary)
+    if failure is not None:
+        raise failure
     return RobotRun(recording, summary, interrupted, wall, folder)
 
 

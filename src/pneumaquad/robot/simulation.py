@@ -58,9 +58,16 @@ from .coupling import (
     X_FORCE_GAIN,
     X_FORCE_TAU,
 )
+from .errors import SimulationDivergedError
 from .stepping import MJ_STEP_ADDRESS, advance_chunk
 
-__all__ = ["RobotSimulation", "seal_friction_row", "stance_swing_schedule"]
+__all__ = [
+    "RobotSimulation",
+    "SimulationDivergedError",
+    "seal_friction_row",
+    "stance_swing_schedule",
+]
+
 
 GainSchedule = Callable[["RobotSimulation"], np.ndarray]
 
@@ -313,6 +320,7 @@ class RobotSimulation:
             self.gain_scale[:] = self.base_gain_scale * self.gain_schedule(self)
         table = _NO_TABLE if reference_table is None else reference_table
         d = self.data
+        start = self.time
         advance_chunk(
             MJ_STEP_ADDRESS, count, self.model._address, d._address, self.physics_steps, table,
             reference_start,
@@ -324,6 +332,13 @@ class RobotSimulation:
             self.velocities, self.reference_positions, self.control_step, self.substeps,
         )
         self.steps_taken += count
+        if d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0:
+            end = start + count * self.control_step
+            raise SimulationDivergedError(
+                f"the simulation diverged between t = {start:.4g} s and {end:.4g} s "
+                "(non-finite or huge joint accelerations; MuJoCo reset the state); try a "
+                "smaller simulation.control_step, more substeps or softer contacts"
+            )
 
     # --- readouts --------------------------------------------------------------------
     def chamber_pressures(self) -> np.ndarray:
