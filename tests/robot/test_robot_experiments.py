@@ -219,3 +219,30 @@ def test_a_diverging_run_stops_with_a_clear_error_and_keeps_its_recording(
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert "diverged" in summary["error"]
     assert read_recording(tmp_path / "recording.csv")["time [s]"].size >= 1
+
+
+def test_tank_supply_runs_down_by_the_air_the_cylinders_draw() -> None:
+    """With ``supply="tank"`` all 12 cylinders draw from the actuator files' 2 L tank: its
+    pressure falls by R·T·m/V (isothermal) for the m they drew, and the endurance
+    estimate is the usable mass over the mean flow."""
+    from pneumaquad.robot.experiment import tank_endurance
+
+    sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "fixed"), supply="tank")
+    tank = sim.robot.actuators["alpha"].supply
+    start = sim.supply_pressure()
+    assert start == pytest.approx(tank.tank_initial_pressure)
+    pose = np.tile(np.radians([0.0, -30.0, 60.0]), 4)
+    sim.set_pose(pose)
+    target = pose.copy()
+    target[3:6] += np.radians([20.0, -15.0, 20.0])
+    sim.command_angles(target)
+    sim.step(1000)
+    drawn = sim.air_consumed()
+    assert drawn > 0.0
+    gas_constant = sim.robot.actuators["alpha"].gas.gas_constant
+    gas = gas_constant * tank.tank_temperature / tank.tank_volume
+    assert start - sim.supply_pressure() == pytest.approx(gas * drawn, rel=1e-9)
+    usable = tank.tank_volume * (start - tank.supply_pressure) / (
+        gas_constant * tank.tank_temperature
+    )
+    assert tank_endurance(sim, 1e-4) == pytest.approx(usable / 1e-4, rel=1e-9)
