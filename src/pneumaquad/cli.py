@@ -347,11 +347,13 @@ def _register_robot_commands() -> None:
     from pneumaquad.cli_fit import fit_app
     from pneumaquad.cli_report import report_command
     from pneumaquad.cli_robot import leg_app, robot_app, video_command
+    from pneumaquad.cli_serve import serve_app
 
     app.add_typer(fit_app, name="fit")
     app.command("report")(report_command)
     app.add_typer(leg_app, name="leg")
     app.add_typer(robot_app, name="robot")
+    app.add_typer(serve_app, name="serve")
     app.command("video")(video_command)
 
 

@@ -14,5 +14,13 @@ App. C.2.4). This package holds the pieces every process of such a split needs:
   SrLib ``SendNewData``/``ReceiveNewData`` (App. C.2.4), for thesis-compatible peers;
 - :mod:`pneumaquad.network.packet_log`, :mod:`pneumaquad.network.timing` and
   :mod:`pneumaquad.network.timing_plots`: the per-packet log and the analysis that
-  replaces the thesis's Wireshark work (ch. 5.3.1).
+  replaces the thesis's Wireshark work (ch. 5.3.1);
+- :mod:`pneumaquad.network.dynamics_side` and :mod:`pneumaquad.network.actuator_side`:
+  the two halves of the robot simulation (MuJoCo dynamics; cylinders, valves and
+  controllers), which reproduce the in-process run bit for bit in lockstep;
+- :mod:`pneumaquad.network.endpoint`, :mod:`pneumaquad.network.server` and
+  :mod:`pneumaquad.network.client`: UDP endpoints (127.0.0.1 by default, optional peer
+  filter), the dynamics server (lockstep or paced real time, timeouts, safe state,
+  resynchronisation, packet log) and the actuator client;
+- :mod:`pneumaquad.network.faults`: a fault-injection relay for tests and experiments.
 """

@@ -1,0 +1,189 @@
+"""Command-line interface of the networked co-simulation: ``pneumaquad serve ...``.
+
+``serve dynamics`` runs the MuJoCo robot as a UDP server (valve, force or torque
+commands; lockstep or real time); ``serve actuators`` runs the cylinders, valves and
+controllers against such a server (force commands, lockstep). The wire format is
+``docs/protocol.md``. Both write a run folder (recording, ``packets.parquet``,
+``timing.json``, ``rtt.png``, ``timeline.png``); Ctrl-C stops at the next step, keeps
+the files and exits with 130.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from pneumaquad.cli import OutputOption, SetOption, console
+
+serve_app = typer.Typer(help="Networked co-simulation over UDP (thesis ch. 5.1-5.3).",
+                        no_args_is_help=True)
+
+ParamsOption = Annotated[
+    str, typer.Option("--params", "-p", help="Robot parameter set name or TOML path.")
+]
+ConfigurationOption = Annotated[
+    str, typer.Option(help="Robot configuration: quadruped, fixed or testbed.")
+]
+
+
+def _fail(message: str) -> None:
+    console.print(f"[red]error:[/red] {message}", highlight=False)
+    raise typer.Exit(2)
+
+
+def _robot(params: str, overrides: list[str] | None, configuration: str):
+    from pneumaquad.params import ParameterError, load_robot
+    from pneumaquad.robot.builder import CONFIGURATIONS, build_robot
+
+    if configuration not in CONFIGURATIONS:
+        _fail(f"--configuration {configuration!r}: expected one of {', '.join(CONFIGURATIONS)}")
+    try:
+        return build_robot(load_robot(params, overrides or []), configuration)
+    except (ParameterError, ValueError, FileNotFoundError) as error:
+        _fail(str(error))
+
+
+def _address(text: str, option: str):
+    from pneumaquad.network.endpoint import parse_address
+
+    try:
+        return parse_address(text)
+    except ValueError as error:
+        _fail(f"{option}: {error}")
+
+
+def _posture(text: str, joint_count: int) -> np.ndarray:
+    try:
+        values = [math.radians(float(v)) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3:
+        _fail(f"--posture {text!r}: expected three angles in degrees, alpha,beta,gamma")
+    return np.tile(values, joint_count // 3)
+
+
+def _print(summary: dict, keys: tuple[str, ...]) -> None:
+    for key in keys:
+        if key in summary and summary[key] is not None:
+            console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
+
+
+@serve_app.command("dynamics")
+def serve_dynamics(
+    params: ParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    configuration: ConfigurationOption = "fixed",
+    command: Annotated[str, typer.Option(help="Accepted commands: valve, force or torque.")]
+    = "force",
+    mode: Annotated[str, typer.Option(help="lockstep (step per command) or realtime.")]
+    = "lockstep",
+    bind: Annotated[str, typer.Option(help="Local address to listen on.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="UDP port (0: any free one).")] = 47000,
+    peer: Annotated[str | None, typer.Option(help="Accept only HOST:PORT.")] = None,
+    timeout: Annotated[float, typer.Option(help="Realtime: command timeout [s].")] = 0.1,
+    duration: Annotated[float | None, typer.Option(help="Wall-clock limit [s].")] = None,
+    posture: Annotated[str, typer.Option(help="Initial alpha,beta,gamma of every leg [deg].")]
+    = "0,-30,60",
+    record_every: Annotated[int, typer.Option(help="Record every n-th control step.")] = 1,
+    output: OutputOption = None,
+) -> None:
+    """Serve the robot's dynamics over UDP until BYE, --duration or Ctrl-C."""
+    from pneumaquad.interruption import deferred_interrupt
+    from pneumaquad.network.dynamics_side import COMMAND_KINDS, DynamicsSide
+    from pneumaquad.network.server import MODES, DynamicsServer
+    from pneumaquad.recording import create_run_folder
+
+    if command not in COMMAND_KINDS:
+        _fail(f"--command {command!r}: expected one of {', '.join(COMMAND_KINDS)}")
+    if mode not in MODES:
+        _fail(f"--mode {mode!r}: expected one of {', '.join(MODES)}")
+    if not timeout > 0 or record_every < 1 or (duration is not None and not duration > 0):
+        _fail("--timeout and --duration must be > 0, --record-every >= 1")
+    robot = _robot(params, overrides, configuration)
+    peer_address = None if peer is None else _address(peer, "--peer")
+    try:
+        side = DynamicsSide(robot, command)
+    except ValueError as error:
+        _fail(str(error))
+    side.set_pose(_posture(posture, robot.joint_count))
+    try:
+        server = DynamicsServer(side, (bind, port), peer_address, mode, timeout, duration,
+                                None, record_every)
+    except OSError as error:
+        _fail(f"cannot listen on {bind}:{port}: {error}")
+    server.folder = create_run_folder(output, f"serve-dynamics-{mode}")
+    console.print(f"dynamics ({command}, {mode}) listening on "
+                  f"{server.address[0]}:{server.address[1]}; run folder {server.folder}")
+    with deferred_interrupt() as request:
+        summary = server.run(request)
+    _print(summary, ("control steps [count]", "simulated time [s]", "wall time [s]",
+                     "malformed [count]", "duplicates [count]", "reordered [count]",
+                     "foreign [count]", "timeouts [count]", "achieved rate [Hz]",
+                     "jitter p99 [s]", "overruns [count]"))
+    if request.requested:
+        console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
+        raise typer.Exit(130)
+
+
+@serve_app.command("actuators")
+def serve_actuators(
+    dynamics: Annotated[str, typer.Option(help="Dynamics server HOST:PORT.")]
+    = "127.0.0.1:47000",
+    params: ParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    configuration: ConfigurationOption = "fixed",
+    experiment: Annotated[str, typer.Option(help="hold, gamma-step or gamma-sine.")]
+    = "gamma-step",
+    settle: Annotated[float, typer.Option(help="Hold before the motion [s].")] = 0.5,
+    duration: Annotated[float, typer.Option(help="Simulated time [s].")] = 1.0,
+    reply_timeout: Annotated[float, typer.Option(help="Wait for a STATE before resending [s].")]
+    = 0.05,
+    output: OutputOption = None,
+) -> None:
+    """Run cylinders, valves and controllers against a dynamics server (lockstep)."""
+    from pneumaquad.interruption import deferred_interrupt
+    from pneumaquad.network.actuator_side import ActuatorSide
+    from pneumaquad.network.client import ActuatorClient, NoReplyError
+    from pneumaquad.network.experiments import EXPERIMENTS, make_experiment
+    from pneumaquad.recording import create_run_folder
+
+    if experiment not in EXPERIMENTS:
+        _fail(f"--experiment {experiment!r}: expected one of {', '.join(EXPERIMENTS)}")
+    if not duration > 0 or not reply_timeout > 0 or settle < 0:
+        _fail("--duration and --reply-timeout must be > 0, --settle >= 0")
+    address = _address(dynamics, "--dynamics")
+    robot = _robot(params, overrides, configuration)
+    try:
+        side = ActuatorSide(robot)
+    except ValueError as error:
+        _fail(str(error))
+    folder: Path = create_run_folder(output, f"serve-actuators-{experiment}")
+    client = ActuatorClient(side, address, reply_timeout=reply_timeout, folder=folder)
+    steps = round(duration / side.control_step)
+    interrupted = False
+    try:
+        with deferred_interrupt() as request:
+            initial = client.connect()
+            try:
+                plan = make_experiment(experiment, robot.joint_names, initial.joint_angles,
+                                       side.control_step, settle)
+            except ValueError as error:
+                _fail(str(error))
+            summary = client.run(plan, steps, initial, request)
+            interrupted = request.requested
+            client.bye()
+    except NoReplyError as error:
+        _fail(f"{error} (is `pneumaquad serve dynamics --command force` running there?)")
+    finally:
+        client.close()
+    console.print(f"run folder: [bold]{folder}[/bold]")
+    _print(summary, ("control steps [count]", "wall time [s]", "resends [count]",
+                     "round-trip time median [s]", "round-trip time p99 [s]"))
+    if interrupted:
+        console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
+        raise typer.Exit(130)
+

@@ -1,0 +1,139 @@
+"""The actuator side of the networked co-simulation: controllers and pneumatics, no MuJoCo.
+
+The thesis ran the valve, cylinder and controller models in Simulink on an xPC target and
+sent joint commands to the dynamics over UDP (Daepp 2011, ch. 5.1-5.2). Here
+:class:`ActuatorSide` holds the packed actuator arrays, the PID controllers and their
+references exactly as :class:`~pneumaquad.robot.simulation.RobotSimulation` builds them
+(it constructs one and reuses its arrays; the simulation's MuJoCo data is used only to
+place the pistons by :meth:`ActuatorSide.set_pose`, never stepped). Each
+:meth:`ActuatorSide.forces` call is one control step of
+:func:`~pneumaquad.robot.coupling.robot_control_step` fed with the piston positions and
+velocities of a ``STATE``; the returned cylinder forces go back as a ``FORCE_COMMAND``.
+
+Differences to the in-process run: the controller reads the piston position as
+``(x + l2) - l2`` (the kernel works on tendon lengths), which can differ from ``x`` in the
+last bit; the stance/swing gain schedule (which needs foot contact forces) is not applied.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pneumaquad.network.state import StateMessage
+from pneumaquad.robot.builder import RobotModel
+from pneumaquad.robot.coupling import L_RETRACTED, robot_control_step
+from pneumaquad.robot.simulation import RobotSimulation
+
+__all__ = ["ActuatorSide"]
+
+
+class ActuatorSide:
+    """Cylinders, valves and joint controllers of a robot, driven by received states.
+
+    Parameters
+    ----------
+    robot
+        From :func:`pneumaquad.robot.builder.build_robot` (the same parameters as the
+        dynamics side).
+    supply
+        Optional supply-model override (``"ideal"`` or ``"tank"``).
+
+    Raises
+    ------
+    ValueError
+        ``simulation.seal_friction = "actuator"``: that friction is applied through the
+        MuJoCo tendon damping, which a ``FORCE_COMMAND`` cannot carry.
+    """
+
+    def __init__(self, robot: RobotModel, supply: str | None = None) -> None:
+        if robot.parameters.simulation.seal_friction != "mujoco":
+            raise ValueError(
+                'the networked actuator side needs simulation.seal_friction = "mujoco" '
+                "(the dynamics side computes the seal friction from the piston velocity)")
+        self.robot = robot
+        self.simulation = RobotSimulation(robot, supply=supply)
+        self.joint_count = robot.joint_count
+        self.control_step = self.simulation.control_step
+        self.substeps = self.simulation.substeps
+        count = self.joint_count
+        self._tendon_ids = np.arange(count)
+        self._actuator_ids = np.arange(count)
+        self._control = np.zeros(count)
+        self._frictionloss = np.zeros(count)
+        self._damping = np.zeros(count)
+        self._lengths = np.zeros(count)
+        self._velocities = np.zeros(count)
+        self._retracted = self.simulation.linkage[:, L_RETRACTED].copy()
+        self.steps_taken = 0
+
+    # --- set-up and commands -----------------------------------------------------------
+    def set_pose(self, joint_angles: np.ndarray, chamber_pressure: float | None = None) -> None:
+        """Reset actuators and controllers for a robot at rest at ``joint_angles`` [rad].
+
+        Same initial pistons and chamber pressures as
+        :meth:`RobotSimulation.set_pose <pneumaquad.robot.simulation.RobotSimulation.set_pose>`.
+        """
+        self.simulation.set_pose(np.asarray(joint_angles, dtype=float),
+                                 chamber_pressure=chamber_pressure)
+        self.steps_taken = 0
+
+    def command_angles(self, angles: np.ndarray, joints: np.ndarray | None = None) -> None:
+        """Closed-loop position control of ``joints`` (all by default) to ``angles`` [rad]."""
+        self.simulation.command_angles(angles, joints)
+
+    def command_voltages(self, voltages: np.ndarray, joints: np.ndarray | None = None) -> None:
+        """Open-loop valve voltages [V] for ``joints`` (all by default)."""
+        self.simulation.command_voltages(voltages, joints)
+
+    def release(self, joints: np.ndarray | None = None) -> None:
+        """Hold the valves of ``joints`` at their offset (closed centre)."""
+        self.simulation.release(joints)
+
+    @property
+    def reference_angles(self) -> np.ndarray:
+        """Joint-angle references [rad] (a view; closed-loop joints follow it)."""
+        return self.simulation.reference_angles
+
+    # --- the control step --------------------------------------------------------------
+    def forces(self, state: StateMessage) -> np.ndarray:
+        """One control step of controllers and actuators at the pistons of ``state``.
+
+        Parameters
+        ----------
+        state
+            The dynamics' state; its piston positions [m] and velocities [m/s] are used.
+
+        Returns
+        -------
+        numpy.ndarray
+            Cylinder forces [N] (positive extends the piston), one per joint, to apply
+            during the next control step.
+        """
+        s = self.simulation
+        positions = np.asarray(state.piston_positions, dtype=np.float64)
+        if positions.size != self.joint_count:
+            raise ValueError(f"STATE has {positions.size} joints, the robot {self.joint_count}")
+        np.add(positions, self._retracted, out=self._lengths)
+        self._velocities[:] = state.piston_velocities
+        robot_control_step(
+            self._lengths, self._velocities, self._tendon_ids, self._actuator_ids,
+            self._control, self._frictionloss, self._damping, s.linkage, s.seal, True,
+            s.params, s.state, s.supply, s.outputs, s.gains, s.gain_scale, s.extra,
+            s.pid_state, s.force_mean, s.reference_angles, s.open_loop_voltage, s.commands,
+            s.positions, s.velocities, s.reference_positions, s.control_step, s.substeps,
+        )
+        self.steps_taken += 1
+        return self._control.copy()
+
+    # --- readouts ----------------------------------------------------------------------
+    def valve_commands(self) -> np.ndarray:
+        """Valve voltages of the last step [V]."""
+        return self.simulation.commands.copy()
+
+    def chamber_pressures(self) -> np.ndarray:
+        """(joints, 2) cap and rod pressures [Pa], absolute."""
+        return self.simulation.chamber_pressures()
+
+    def air_consumed(self) -> float:
+        """Air drawn from the supply since the start [kg]."""
+        return self.simulation.air_consumed()

@@ -1,0 +1,171 @@
+"""The actuator client: an :class:`ActuatorSide` driving a remote dynamics server in lockstep.
+
+The loop is the thesis's split seen from the Simulink side (Daepp 2011, ch. 5.1): send
+the cylinder forces (``FORCE_COMMAND``, sender time = the simulation time at which they
+take effect), wait for the ``STATE`` that answers them, compute the next forces. When no
+answer arrives within ``reply_timeout`` the same forces are sent again under a new
+sequence number (counted); the server recognises the retransmission by its sender time
+and does not step twice, so lost datagrams delay the run but do not change it.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pneumaquad.network.actuator_side import ActuatorSide
+from pneumaquad.network.endpoint import DEFAULT_HOST, Address, UdpEndpoint
+from pneumaquad.network.experiments import Experiment
+from pneumaquad.network.protocol import encode_bye, encode_command, encode_hello
+from pneumaquad.network.run_output import NetworkRecording, write_network_files
+from pneumaquad.network.server import StopFlag
+from pneumaquad.network.state import StateMessage, state_from_values
+from pneumaquad.network.wire import MessageType
+
+__all__ = ["ActuatorClient", "NoReplyError"]
+
+
+class NoReplyError(ConnectionError):
+    """The dynamics server did not answer within the retry budget."""
+
+
+class ActuatorClient:
+    """Run an :class:`ActuatorSide` against a dynamics server (force commands, lockstep).
+
+    Parameters
+    ----------
+    side
+        The actuator side.
+    dynamics
+        Server ``(host, port)``.
+    bind
+        Local ``(host, port)``; 127.0.0.1 and a free port by default.
+    reply_timeout
+        Wait for a ``STATE`` before resending [s].
+    max_retries
+        Resends of one command before :class:`NoReplyError`.
+    folder
+        Run folder (recording of angles, forces and valve commands, packet files).
+    """
+
+    def __init__(self, side: ActuatorSide, dynamics: Address,
+                 bind: Address = (DEFAULT_HOST, 0), reply_timeout: float = 0.05,
+                 max_retries: int = 100, folder: Path | None = None) -> None:
+        self.side = side
+        self.dynamics = dynamics
+        self.endpoint = UdpEndpoint(bind, dynamics, side.joint_count)
+        self.reply_timeout = reply_timeout
+        self.max_retries = max_retries
+        self.folder = None if folder is None else Path(folder)
+        self.resends = 0  # commands sent again after a reply timeout [count]
+        self.steps = 0
+        self.states: list[StateMessage] = []
+        self.summary: dict[str, Any] = {}
+
+    def _exchange(self, datagram_for: Any, accept: Any) -> StateMessage:
+        """Send ``datagram_for(sequence)`` until a ``STATE`` satisfying ``accept`` arrives."""
+        sent: set[int] = set()
+        for attempt in range(self.max_retries + 1):
+            if attempt:
+                self.resends += 1
+            sequence = self.endpoint.take_sequence()
+            sent.add(sequence)
+            self.endpoint.send(datagram_for(sequence), self.dynamics)
+            deadline = time.perf_counter() + self.reply_timeout
+            while (remaining := deadline - time.perf_counter()) > 0:
+                for message, _ in self.endpoint.receive(remaining):
+                    if message.type != MessageType.STATE:
+                        continue
+                    state = state_from_values(np.asarray(message.values), self.side.joint_count)
+                    if accept(state, sent):
+                        return state
+        raise NoReplyError(f"no STATE from {self.dynamics} after {self.max_retries} resends")
+
+    def connect(self) -> StateMessage:
+        """``HELLO`` and the first ``STATE``; resets the actuators to its posture."""
+        self.endpoint.sequence = 0
+        state = self._exchange(
+            lambda sequence: encode_hello(sequence, time.monotonic(), self.side.joint_count,
+                                          self.side.control_step),
+            lambda state, sent: True)
+        self.side.set_pose(state.joint_angles)
+        return state
+
+    def run(self, experiment: Experiment | None, steps: int,
+            initial: StateMessage | None = None,
+            stop_request: StopFlag | None = None) -> dict[str, Any]:
+        """Run ``steps`` control steps (after :meth:`connect`, whose state is ``initial``).
+
+        Parameters
+        ----------
+        experiment
+            References of every step (all joints closed loop); ``None``: the caller set
+            the commands of :attr:`side`.
+        steps
+            Control steps.
+        initial
+            State to start from; :meth:`connect` is called when omitted.
+        stop_request
+            Checked every step: ``requested`` ends the run early (Ctrl-C).
+
+        Returns
+        -------
+        dict
+            Counters and round-trip figures (also ``timing.json`` with a run folder).
+        """
+        state = self.connect() if initial is None else initial
+        recording = None
+        if self.folder is not None:
+            names = self.side.robot.joint_names
+            columns = ["time [s]"] + [f"{j} {q}" for j in names for q in (
+                "reference [rad]", "angle [rad]", "force [N]", "command [V]")]
+            recording = NetworkRecording(self.folder, columns)
+        start = time.perf_counter()
+        try:
+            for _ in range(steps):
+                if stop_request is not None and stop_request.requested:
+                    break
+                if experiment is not None:
+                    self.side.command_angles(experiment.references(self.steps))
+                forces = self.side.forces(state)
+                state = self.exchange_forces(forces, state.simulation_time)
+                self.steps += 1
+                self.states.append(state)
+                if recording is not None:
+                    recording.append(np.concatenate([[state.simulation_time], np.column_stack(
+                        [self.side.reference_angles, state.joint_angles, forces,
+                         self.side.valve_commands()]).ravel()]))
+        finally:
+            self._finish(time.perf_counter() - start, recording)
+        return self.summary
+
+    def exchange_forces(self, forces: np.ndarray, effect_time: float) -> StateMessage:
+        """Send ``forces`` [N] for ``effect_time`` [s], return the answering ``STATE``."""
+        return self._exchange(
+            lambda sequence: encode_command(MessageType.FORCE_COMMAND, sequence, effect_time,
+                                            forces, self.side.joint_count),
+            lambda reply, sent: reply.answered_sequence in sent)
+
+    def bye(self) -> None:
+        """Tell the server the session ends (sent three times: it is not acknowledged)."""
+        for _ in range(3):
+            self.endpoint.send(encode_bye(self.endpoint.take_sequence(), time.monotonic()),
+                               self.dynamics)
+
+    def _finish(self, wall_time: float, recording: NetworkRecording | None) -> None:
+        from pneumaquad.network.timing import round_trip_times, rtt_statistics
+
+        self.summary = {"control steps [count]": self.steps, "wall time [s]": wall_time,
+                        "resends [count]": self.resends} | self.endpoint.counters()
+        self.summary |= rtt_statistics(round_trip_times(self.endpoint.log, "command"))
+        if recording is not None and self.folder is not None:
+            recording.close()
+            self.summary = write_network_files(self.folder, self.endpoint.log,
+                                               self.side.control_step, self.summary)
+
+    def close(self) -> None:
+        """Close the socket."""
+        self.endpoint.close()

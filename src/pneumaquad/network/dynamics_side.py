@@ -1,0 +1,216 @@
+"""The dynamics side of the networked co-simulation: MuJoCo, one control step per command.
+
+The thesis ran the rigid-body dynamics (SrLib) on a PC that received joint torques over
+UDP, stepped once and sent the state back (Daepp 2011, ch. 5.1, App. C.2.4). Here the
+dynamics accepts one of three command kinds (``docs/protocol.md``):
+
+``"valve"``
+    Valve input voltages [V]. The actuators are simulated on this side: a
+    :class:`~pneumaquad.robot.simulation.RobotSimulation` runs every joint open loop at
+    the received voltages, so any external UDP client can drive the pneumatic robot.
+``"force"``
+    Cylinder forces [N] from an external actuator model (the thesis's split). Only
+    MuJoCo runs here: the forces go into ``data.ctrl`` and the seal friction is computed
+    on this side exactly as :func:`~pneumaquad.robot.coupling.robot_control_step` does
+    with ``simulation.seal_friction = "mujoco"`` (Stribeck breakaway force at the current
+    tendon velocity as the tendon's dry friction, Cv as its damping).
+``"torque"``
+    Joint torques [N m] into ``qfrc_applied`` of the joint degrees of freedom; cylinder
+    motors and seal friction are zero (rigid-body dynamics only, like SrLib).
+
+Safe state (:meth:`DynamicsSide.engage_safe_state`): valve mode holds every valve at its
+offset voltage (closed centre, the chambers hold their air); force and torque modes apply
+zero force / torque (seal friction stays, it is physical).
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from pneumaquad.layout import P_STROKE
+from pneumaquad.network.state import StateMessage, StatusFlag
+from pneumaquad.robot.builder import RobotModel
+from pneumaquad.robot.coupling import (
+    F_COULOMB,
+    F_EXPONENT,
+    F_STATIC,
+    F_STRIBECK_VELOCITY,
+    F_VISCOUS,
+    L_RETRACTED,
+)
+from pneumaquad.robot.simulation import RobotSimulation
+
+__all__ = ["COMMAND_KINDS", "DynamicsSide", "piston_readout"]
+
+COMMAND_KINDS = ("valve", "force", "torque")
+
+
+def piston_readout(model_data: mujoco.MjData, robot: RobotModel, retracted: np.ndarray,
+                   stroke: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Piston positions [m] (clipped to the stroke) and velocities [m/s] from the tendons.
+
+    These are the values the in-process controllers read: MuJoCo's tendon lengths and
+    velocities of the last kinematics evaluation (the start of the last physics step).
+    """
+    lengths = model_data.ten_length[robot.tendon_id]
+    positions = np.minimum(np.maximum(lengths - retracted, 0.0), stroke)
+    return positions, model_data.ten_velocity[robot.tendon_id].copy()
+
+
+class DynamicsSide:
+    """MuJoCo robot advanced one control step per received command.
+
+    Parameters
+    ----------
+    robot
+        From :func:`pneumaquad.robot.builder.build_robot`. Its ``model`` is written to
+        (seal friction per step in force mode, zero friction in torque mode).
+    command_kind
+        ``"valve"`` [V], ``"force"`` [N] or ``"torque"`` [N m].
+
+    Raises
+    ------
+    ValueError
+        Unknown command kind, or force mode with ``simulation.seal_friction =
+        "actuator"`` (that friction law needs the actuator's internal state).
+    """
+
+    def __init__(self, robot: RobotModel, command_kind: str) -> None:
+        if command_kind not in COMMAND_KINDS:
+            raise ValueError(f"command kind {command_kind!r} should be one of {COMMAND_KINDS}")
+        if command_kind == "force" and robot.parameters.simulation.seal_friction != "mujoco":
+            raise ValueError(
+                'force commands need simulation.seal_friction = "mujoco": with "actuator" '
+                "the seal friction depends on the actuator's internal state, which the "
+                "dynamics side does not have; run the actuators here (valve commands) or "
+                'set simulation.seal_friction="mujoco"')
+        self.robot = robot
+        self.command_kind = command_kind
+        self.simulation = RobotSimulation(robot)  # arrays, pose and, in valve mode, actuators
+        self.model = robot.model
+        self.data = self.simulation.data
+        self.joint_count = robot.joint_count
+        self.control_step = self.simulation.control_step
+        self.physics_steps = self.simulation.physics_steps
+        self.command = np.zeros(self.joint_count)
+        self.safe = False
+        self._retracted = self.simulation.linkage[:, L_RETRACTED].copy()
+        self._stroke = self.simulation.params[:, P_STROKE].copy()
+        if command_kind == "torque":
+            self.model.tendon_frictionloss[robot.tendon_id] = 0.0
+            self.model.tendon_damping[robot.tendon_id] = 0.0
+        self.engage_safe_state()
+        self.safe = False
+
+    # --- pose and commands -------------------------------------------------------------
+    def set_pose(self, joint_angles: np.ndarray) -> None:
+        """Place the robot at rest at ``joint_angles`` [rad] (actuators reset)."""
+        self.simulation.set_pose(np.asarray(joint_angles, dtype=float))
+
+    def apply(self, values: np.ndarray) -> None:
+        """Hold ``values`` (one per joint: [V], [N] or [N m]) from the next step on.
+
+        Leaves the safe state.
+        """
+        values = np.asarray(values, dtype=np.float64).reshape(-1)
+        if values.size != self.joint_count:
+            raise ValueError(f"{values.size} command values for {self.joint_count} joints")
+        self.command[:] = values
+        self.safe = False
+        if self.command_kind == "valve":
+            self.simulation.command_voltages(self.command)
+
+    def engage_safe_state(self) -> None:
+        """Valves at their offset (closed centre) in valve mode; zero force / torque else."""
+        self.safe = True
+        self.command[:] = 0.0
+        if self.command_kind == "valve":
+            self.simulation.release()
+
+    # --- stepping ----------------------------------------------------------------------
+    def step(self) -> None:
+        """Advance exactly one control step with the held command."""
+        if self.command_kind == "valve":
+            self.simulation.step(1)
+            return
+        model, data, robot = self.model, self.data, self.robot
+        if self.command_kind == "force":
+            data.ctrl[robot.actuator_id] = self.command
+            seal = self.simulation.seal
+            speed = np.abs(data.ten_velocity[robot.tendon_id])
+            # Same expression, same operation order as robot_control_step (bit-identical).
+            for i, tendon in enumerate(robot.tendon_id):
+                breakaway = seal[i, F_COULOMB] + (seal[i, F_STATIC] - seal[i, F_COULOMB]) * \
+                    math.exp(-((float(speed[i]) / seal[i, F_STRIBECK_VELOCITY])
+                               ** seal[i, F_EXPONENT]))
+                model.tendon_frictionloss[tendon] = breakaway
+                model.tendon_damping[tendon] = seal[i, F_VISCOUS]
+        else:
+            data.ctrl[robot.actuator_id] = 0.0
+            data.qfrc_applied[robot.dof_address] = self.command
+        for _ in range(self.physics_steps):
+            mujoco.mj_step(model, data)
+        self.simulation.steps_taken += 1
+
+    # --- readouts ----------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """Simulation time [s]."""
+        return float(self.data.time)
+
+    def state(self, answered_sequence: int = -1,
+              status: StatusFlag = StatusFlag.NONE) -> StateMessage:
+        """The current state as a ``STATE`` payload (piston values: see :func:`piston_readout`)."""
+        data, robot = self.data, self.robot
+        positions, velocities = piston_readout(data, robot, self._retracted, self._stroke)
+        if self.safe:
+            status |= StatusFlag.SAFE_STATE
+        if robot.free:
+            thorax, quaternion = data.qpos[0:3].copy(), data.qpos[3:7].copy()
+        else:
+            thorax = data.xpos[robot.thorax_id].copy()
+            quaternion = data.xquat[robot.thorax_id].copy()
+        return StateMessage(
+            simulation_time=self.time,
+            joint_angles=data.qpos[robot.qpos_address].copy(),
+            joint_velocities=data.qvel[robot.dof_address].copy(),
+            piston_positions=positions,
+            piston_velocities=velocities,
+            thorax_position=thorax,
+            thorax_quaternion=quaternion,
+            answered_sequence=answered_sequence,
+            status=status,
+        )
+
+    # --- recording ---------------------------------------------------------------------
+    def recording_columns(self) -> tuple[str, ...]:
+        """Columns of :meth:`recording_row` (``quantity [unit]``)."""
+        if self.command_kind == "valve":
+            from pneumaquad.robot.recording import recording_columns
+
+            return recording_columns(self.simulation)
+        unit = "[N]" if self.command_kind == "force" else "[N m]"
+        columns = ["time [s]"]
+        for joint in self.robot.joint_names:
+            columns += [f"{joint} angle [rad]", f"{joint} angular velocity [rad/s]",
+                        f"{joint} piston position [m]", f"{joint} piston velocity [m/s]",
+                        f"{joint} {self.command_kind} command {unit}"]
+        columns += ["thorax x [m]", "thorax y [m]", "thorax z [m]", "thorax qw [-]",
+                    "thorax qx [-]", "thorax qy [-]", "thorax qz [-]"]
+        return tuple(columns)
+
+    def recording_row(self) -> np.ndarray:
+        """One row of the current state, layout of :meth:`recording_columns`."""
+        if self.command_kind == "valve":
+            from pneumaquad.robot.recording import recording_row
+
+            return recording_row(self.simulation, self.simulation.reference_angles)
+        state = self.state()
+        per_joint = np.column_stack([state.joint_angles, state.joint_velocities,
+                                     state.piston_positions, state.piston_velocities,
+                                     self.command]).ravel()
+        return np.concatenate([[state.simulation_time], per_joint, state.thorax_position,
+                               state.thorax_quaternion])

@@ -1,0 +1,110 @@
+"""Run-folder output of a networked peer: robot recording, packet log, timing figures.
+
+:class:`NetworkRecording` buffers recording rows and hands them to a
+:class:`~pneumaquad.recording.RunRecorder` in blocks (``recording.csv`` stays readable
+while the run goes on; ``recording.parquet`` on close). :func:`write_network_files`
+writes ``packets.parquet``, ``timing.json`` (:func:`~pneumaquad.network.timing.timing_summary`
+plus the caller's figures), ``rtt.png`` and ``timeline.png``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pneumaquad.network.packet_log import PacketLog
+from pneumaquad.network.timing import timing_summary
+from pneumaquad.recording import RunRecorder
+
+__all__ = ["NetworkRecording", "jsonable", "write_network_files"]
+
+_BLOCK_ROWS = 200
+
+
+def jsonable(value: Any) -> Any:
+    """Plain JSON values: numpy to Python, NaN / inf to ``None``."""
+    if isinstance(value, Mapping):
+        return {str(key): jsonable(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [jsonable(item) for item in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+class NetworkRecording:
+    """Buffered robot recording of a networked run.
+
+    Parameters
+    ----------
+    folder
+        Run folder.
+    columns
+        Column names (``quantity [unit]``).
+    """
+
+    def __init__(self, folder: Path, columns: Sequence[str]) -> None:
+        self.recorder = RunRecorder(folder, columns)
+        self.width = len(columns)
+        self._buffer = np.empty((_BLOCK_ROWS, self.width))
+        self._rows = 0
+
+    def append(self, row: np.ndarray) -> None:
+        """Buffer one row; a full buffer is written (and flushed) to ``recording.csv``."""
+        self._buffer[self._rows] = row
+        self._rows += 1
+        if self._rows == _BLOCK_ROWS:
+            self.flush()
+
+    def flush(self) -> None:
+        """Write the buffered rows."""
+        if self._rows:
+            self.recorder.append(self._buffer[: self._rows])
+            self._rows = 0
+
+    def close(self) -> None:
+        """Flush and write ``recording.parquet`` (idempotent)."""
+        if not self.recorder.closed:
+            self.flush()
+            self.recorder.close()
+
+
+def write_network_files(folder: Path, log: PacketLog, control_step: float,
+                        extra: Mapping[str, Any], plots: bool = True) -> dict[str, Any]:
+    """Write ``packets.parquet``, ``timing.json`` and the two plots into ``folder``.
+
+    Parameters
+    ----------
+    folder
+        Run folder.
+    log
+        The peer's packet log.
+    control_step
+        Nominal exchange period [s].
+    extra
+        More figures for ``timing.json`` (counters, jitter statistics, ...).
+    plots
+        Draw ``rtt.png`` and ``timeline.png``.
+
+    Returns
+    -------
+    dict
+        The content of ``timing.json``.
+    """
+    folder = Path(folder)
+    log.write(folder / "packets.parquet")
+    summary = dict(timing_summary(log, control_step)) | dict(extra)
+    (folder / "timing.json").write_text(json.dumps(jsonable(summary), indent=2))
+    if plots and len(log):
+        from pneumaquad.network.timing_plots import plot_packet_timeline, plot_rtt_histogram
+
+        plot_rtt_histogram(log, folder / "rtt.png", deadline=control_step)
+        plot_packet_timeline(log, control_step, folder / "timeline.png")
+    return summary
