@@ -13,7 +13,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from pneumaquad.cli import OutputOption, SetOption, console, finish_run, progress_bar
+from pneumaquad.cli_common import OutputOption, SetOption, console, finish_run, progress_bar
 from pneumaquad.params import JOINT_NAMES, load_robot
 
 leg_app = typer.Typer(

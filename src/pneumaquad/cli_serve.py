@@ -17,7 +17,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from pneumaquad.cli import OutputOption, SetOption, console
+from pneumaquad.cli_common import OutputOption, SetOption, console
 
 serve_app = typer.Typer(help="Networked co-simulation over UDP (thesis ch. 5.1-5.3).",
                         no_args_is_help=True)
