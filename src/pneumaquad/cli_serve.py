@@ -72,6 +72,13 @@ def _print(summary: dict, keys: tuple[str, ...]) -> None:
             console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
 
 
+BusyWaitOption = Annotated[
+    float,
+    typer.Option(min=0.0, help="Poll this long [s] before sleeping while waiting for a "
+                 "datagram: lower, steadier latency for a busier core (0 = sleep at once)."),
+]
+
+
 @serve_app.command("dynamics")
 def serve_dynamics(
     params: ParamsOption = "crr-quadruped",
@@ -86,6 +93,7 @@ def serve_dynamics(
     peer: Annotated[str | None, typer.Option(help="Accept only HOST:PORT.")] = None,
     timeout: Annotated[float, typer.Option(help="Realtime: command timeout [s].")] = 0.1,
     duration: Annotated[float | None, typer.Option(help="Wall-clock limit [s].")] = None,
+    busy_wait: BusyWaitOption = 0.002,
     posture: Annotated[str, typer.Option(help="Initial alpha,beta,gamma of every leg [deg].")]
     = "0,-30,60",
     record_every: Annotated[int, typer.Option(help="Record every n-th control step.")] = 1,
@@ -112,7 +120,7 @@ def serve_dynamics(
     side.set_pose(_posture(posture, robot.joint_count))
     try:
         server = DynamicsServer(side, (bind, port), peer_address, mode, timeout, duration,
-                                None, record_every)
+                                None, record_every, busy_wait=busy_wait)
     except OSError as error:
         _fail(f"cannot listen on {bind}:{port}: {error}")
     server.folder = create_run_folder(output, f"serve-dynamics-{mode}")
@@ -142,6 +150,7 @@ def serve_actuators(
     duration: Annotated[float, typer.Option(help="Simulated time [s].")] = 1.0,
     reply_timeout: Annotated[float, typer.Option(help="Wait for a STATE before resending [s].")]
     = 0.05,
+    busy_wait: BusyWaitOption = 0.002,
     output: OutputOption = None,
 ) -> None:
     """Run cylinders, valves and controllers against a dynamics server (lockstep)."""
@@ -162,7 +171,8 @@ def serve_actuators(
     except ValueError as error:
         _fail(str(error))
     folder: Path = create_run_folder(output, f"serve-actuators-{experiment}")
-    client = ActuatorClient(side, address, reply_timeout=reply_timeout, folder=folder)
+    client = ActuatorClient(side, address, reply_timeout=reply_timeout, folder=folder,
+                            busy_wait=busy_wait)
     steps = round(duration / side.control_step)
     interrupted = False
     try:

@@ -53,10 +53,11 @@ class ActuatorClient:
 
     def __init__(self, side: ActuatorSide, dynamics: Address,
                  bind: Address = (DEFAULT_HOST, 0), reply_timeout: float = 0.05,
-                 max_retries: int = 100, folder: Path | None = None) -> None:
+                 max_retries: int = 100, folder: Path | None = None,
+                 busy_wait: float = 0.0) -> None:
         self.side = side
         self.dynamics = dynamics
-        self.endpoint = UdpEndpoint(bind, dynamics, side.joint_count)
+        self.endpoint = UdpEndpoint(bind, dynamics, side.joint_count, busy_wait=busy_wait)
         self.reply_timeout = reply_timeout
         self.max_retries = max_retries
         self.folder = None if folder is None else Path(folder)

@@ -83,7 +83,7 @@ class DynamicsServer:
     def __init__(self, side: DynamicsSide, bind: Address = (DEFAULT_HOST, 0),
                  peer: Address | None = None, mode: str = "lockstep", timeout: float = 0.1,
                  duration: float | None = None, folder: Path | None = None,
-                 record_every: int = 1, plots: bool = True) -> None:
+                 record_every: int = 1, plots: bool = True, busy_wait: float = 0.0) -> None:
         if mode not in MODES:
             raise ValueError(f"mode {mode!r} should be one of {MODES}")
         if not timeout > 0 or record_every < 1:
@@ -95,7 +95,7 @@ class DynamicsServer:
         self.folder = None if folder is None else Path(folder)
         self.record_every = record_every
         self.plots = plots
-        self.endpoint = UdpEndpoint(bind, peer, side.joint_count)
+        self.endpoint = UdpEndpoint(bind, peer, side.joint_count, busy_wait=busy_wait)
         self.command_type = _COMMAND_TYPE[side.command_kind]
         self.client: Address | None = None
         self.answered = -1
