@@ -33,4 +33,5 @@ bench: setup
 	$(BIN)/python benchmarks/rig_speed.py
 	$(BIN)/python benchmarks/cost_table.py
 	$(BIN)/python benchmarks/robot_speed.py
+	$(BIN)/python benchmarks/network_latency.py
 	$(BIN)/pneumaquad report --cost-table --output runs/bench-cost-table
