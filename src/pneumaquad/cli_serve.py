@@ -97,9 +97,19 @@ def serve_dynamics(
     posture: Annotated[str, typer.Option(help="Initial alpha,beta,gamma of every leg [deg].")]
     = "0,-30,60",
     record_every: Annotated[int, typer.Option(help="Record every n-th control step.")] = 1,
+    layout: Annotated[
+        str, typer.Option(help="pnqd (docs/protocol.md) or thesis (App. C.2.4: 21 doubles, "
+                          "R1 torques in, lockstep).")
+    ] = "pnqd",
     output: OutputOption = None,
 ) -> None:
     """Serve the robot's dynamics over UDP until BYE, --duration or Ctrl-C."""
+    if layout == "thesis":
+        _serve_thesis(params, overrides, configuration, bind, port, peer, duration, posture,
+                      output)
+        return
+    if layout != "pnqd":
+        _fail(f"--layout {layout!r}: expected pnqd or thesis")
     from pneumaquad.interruption import deferred_interrupt
     from pneumaquad.network.dynamics_side import COMMAND_KINDS, DynamicsSide
     from pneumaquad.network.server import MODES, DynamicsServer
@@ -132,6 +142,34 @@ def serve_dynamics(
                      "malformed [count]", "duplicates [count]", "reordered [count]",
                      "foreign [count]", "timeouts [count]", "achieved rate [Hz]",
                      "jitter p99 [s]", "overruns [count]"))
+    if request.requested:
+        console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
+        raise typer.Exit(130)
+
+
+def _serve_thesis(params: str, overrides: list[str] | None, configuration: str, bind: str,
+                  port: int, peer: str | None, duration: float | None, posture: str,
+                  output: Path | None) -> None:
+    from pneumaquad.interruption import deferred_interrupt
+    from pneumaquad.network.dynamics_side import DynamicsSide
+    from pneumaquad.network.thesis_server import ThesisServer
+    from pneumaquad.recording import create_run_folder
+
+    robot = _robot(params, overrides, configuration)
+    side = DynamicsSide(robot, "torque")
+    side.set_pose(_posture(posture, robot.joint_count))
+    peer_address = None if peer is None else _address(peer, "--peer")
+    folder = create_run_folder(output, "serve-dynamics-thesis")
+    try:
+        server = ThesisServer(side, (bind, port), peer_address, duration=duration,
+                              folder=folder)
+    except OSError as error:
+        _fail(f"cannot listen on {bind}:{port}: {error}")
+    console.print(f"dynamics (thesis layout, R1 torques, lockstep) listening on "
+                  f"{server.address[0]}:{server.address[1]}; run folder {folder}")
+    with deferred_interrupt() as request:
+        summary = server.run(request)
+    _print(summary, tuple(key for key in summary if key.endswith("]")))
     if request.requested:
         console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
         raise typer.Exit(130)
