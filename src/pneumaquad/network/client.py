@@ -20,7 +20,11 @@ from pneumaquad.network.actuator_side import ActuatorSide
 from pneumaquad.network.endpoint import DEFAULT_HOST, Address, UdpEndpoint
 from pneumaquad.network.experiments import Experiment
 from pneumaquad.network.protocol import encode_bye, encode_command, encode_hello
-from pneumaquad.network.run_output import NetworkRecording, write_network_files
+from pneumaquad.network.run_output import (
+    NetworkRecording,
+    write_network_files,
+    write_run_description,
+)
 from pneumaquad.network.server import StopFlag
 from pneumaquad.network.state import StateMessage, state_from_values
 from pneumaquad.network.wire import MessageType
@@ -122,7 +126,8 @@ class ActuatorClient:
         if self.folder is not None:
             names = self.side.robot.joint_names
             columns = ["time [s]"] + [f"{j} {q}" for j in names for q in (
-                "reference [rad]", "angle [rad]", "force [N]", "command [V]")]
+                "reference [rad]", "angle [rad]", "force [N]", "command [V]",
+                "cap pressure [Pa]", "rod pressure [Pa]")]
             recording = NetworkRecording(self.folder, columns)
         start = time.perf_counter()
         try:
@@ -136,9 +141,11 @@ class ActuatorClient:
                 self.steps += 1
                 self.states.append(state)
                 if recording is not None:
+                    pressures = self.side.chamber_pressures()
                     recording.append(np.concatenate([[state.simulation_time], np.column_stack(
                         [self.side.reference_angles, state.joint_angles, forces,
-                         self.side.valve_commands()]).ravel()]))
+                         self.side.valve_commands(), pressures[:, 0], pressures[:, 1]]
+                    ).ravel()]))
         finally:
             self._finish(time.perf_counter() - start, recording)
         return self.summary
@@ -166,6 +173,7 @@ class ActuatorClient:
             recording.close()
             self.summary = write_network_files(self.folder, self.endpoint.log,
                                                self.side.control_step, self.summary)
+            write_run_description(self.folder, self.side.robot, self.summary)
 
     def close(self) -> None:
         """Close the socket."""

@@ -21,7 +21,7 @@ from pneumaquad.network.packet_log import PacketLog
 from pneumaquad.network.timing import timing_summary
 from pneumaquad.recording import RunRecorder
 
-__all__ = ["NetworkRecording", "jsonable", "write_network_files"]
+__all__ = ["NetworkRecording", "jsonable", "write_network_files", "write_run_description"]
 
 _BLOCK_ROWS = 200
 
@@ -108,3 +108,18 @@ def write_network_files(folder: Path, log: PacketLog, control_step: float,
         plot_rtt_histogram(log, folder / "rtt.png", deadline=control_step)
         plot_packet_timeline(log, control_step, folder / "timeline.png")
     return summary
+
+
+def write_run_description(folder: Path, robot: Any, summary: Mapping[str, Any]) -> None:
+    """Write ``parameters.toml``, ``model.xml`` and ``summary.json`` of a networked run, so
+    that ``pneumaquad report`` and ``pneumaquad video`` read it like any robot run."""
+    from pneumaquad.params import resolved_parameters_toml
+    from pneumaquad.recording import write_summary
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "parameters.toml").write_text(
+        resolved_parameters_toml(robot.parameters), encoding="utf-8"
+    )
+    (folder / "model.xml").write_text(robot.to_xml(), encoding="utf-8")
+    write_summary(folder, jsonable(dict(summary)))

@@ -35,7 +35,11 @@ import numpy as np
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.endpoint import DEFAULT_HOST, Address, UdpEndpoint
 from pneumaquad.network.protocol import encode_pong, encode_state
-from pneumaquad.network.run_output import NetworkRecording, write_network_files
+from pneumaquad.network.run_output import (
+    NetworkRecording,
+    write_network_files,
+    write_run_description,
+)
 from pneumaquad.network.state import StatusFlag
 from pneumaquad.network.timing import jitter_statistics
 from pneumaquad.network.wire import Message, MessageType
@@ -265,3 +269,4 @@ class DynamicsServer:
             self.summary = write_network_files(self.folder, self.endpoint.log,
                                                self.side.control_step, self.summary,
                                                self.plots)
+            write_run_description(self.folder, self.side.robot, self.summary)

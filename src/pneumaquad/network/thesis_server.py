@@ -17,6 +17,7 @@ values are dropped and counted by reason.
 
 from __future__ import annotations
 
+import json
 import select
 import socket
 import time
@@ -28,7 +29,7 @@ import numpy as np
 
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.endpoint import DEFAULT_HOST, Address
-from pneumaquad.network.run_output import NetworkRecording, jsonable
+from pneumaquad.network.run_output import NetworkRecording, jsonable, write_run_description
 from pneumaquad.network.thesis import THESIS_SIZE, decode_thesis_command, encode_thesis_state
 from pneumaquad.network.wire import ProtocolError
 
@@ -163,8 +164,7 @@ class ThesisServer:
             **{f"dropped {reason} [count]": count for reason, count in self.dropped.items()},
         }
         if self.folder is not None:
-            import json
-
             (self.folder / "timing.json").write_text(json.dumps(jsonable(summary), indent=2))
+            write_run_description(self.folder, self.side.robot, summary)
         self.socket.close()
         return summary

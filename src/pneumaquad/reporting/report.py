@@ -21,6 +21,7 @@ from .run_folder import ReportError, RunFolder, load_run_folder
 from .sections import (
     add_comparison,
     add_model_curves,
+    add_network_timing,
     add_parameters,
     add_summary,
     add_time_histories,
@@ -92,6 +93,7 @@ def write_run_report(
         lambda: add_summary(page, run),
         lambda: add_time_histories(page, run, folder),
         lambda: add_model_curves(page, run, folder),
+        lambda: add_network_timing(page, run),
     ]
     if measured is not None:
         assert isinstance(run.parameters, RigSetup)

@@ -268,3 +268,29 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
+
+
+def add_network_timing(page: HtmlPage, run: RunFolder) -> None:
+    """A networked run's packet timing (``timing.json``, ``rtt.png``, ``timeline.png``):
+    round trips, pauses, losses, duplicates, reorders, malformed datagrams, jitter."""
+    file = run.path / "timing.json"
+    if not file.is_file():
+        return
+    page.heading("Network timing")
+    try:
+        timing = json.loads(file.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        page.paragraph(f"timing.json cannot be read: {error}", note=True)
+        return
+    page.paragraph(
+        "Per-datagram log of the co-simulation (packets.parquet), summarised: the round "
+        "trips, the pauses between datagrams (the thesis tracked these with Wireshark, "
+        "5.3.1), and what was dropped and why."
+    )
+    page.table(("figure", "value"), flatten_summary(timing), digits=6)
+    for name, caption in (
+        ("rtt.png", "Round-trip times (histogram) with median, p99 and the control period."),
+        ("timeline.png", "Inter-arrival gaps and pauses over the run."),
+    ):
+        if (run.path / name).is_file():
+            page.figure(run.path / name, caption)

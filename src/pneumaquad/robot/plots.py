@@ -34,10 +34,10 @@ def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: P
                         label="simulated")
         angle_axis.set_title(joint.replace("_", " "))
         angle_axis.set_ylabel("Angle (deg)")
-        pressure_axis.plot(time, pascals_to_psi(recording[f"{joint} cap pressure [Pa]"]), "C3",
-                           lw=1.0, label="cap")
-        pressure_axis.plot(time, pascals_to_psi(recording[f"{joint} rod pressure [Pa]"]), "C2",
-                           lw=1.0, label="rod")
+        for side, colour in (("cap", "C3"), ("rod", "C2")):
+            pressure = recording.get(f"{joint} {side} pressure [Pa]")
+            if pressure is not None:
+                pressure_axis.plot(time, pascals_to_psi(pressure), colour, lw=1.0, label=side)
         pressure_axis.set_ylabel("Pressure (psia)")
         pressure_axis.set_xlabel("Time (s)")
     return _save(fig, axes.ravel(), path, title)

@@ -1,0 +1,50 @@
+"""A networked run folder is a run folder: `pneumaquad report` adds its packet timing."""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from pneumaquad.network.actuator_side import ActuatorSide
+from pneumaquad.network.client import ActuatorClient
+from pneumaquad.network.dynamics_side import DynamicsSide
+from pneumaquad.network.experiments import make_experiment
+from pneumaquad.network.server import DynamicsServer
+from pneumaquad.params import load_robot
+from pneumaquad.reporting import build_run_report
+from pneumaquad.robot.builder import build_robot
+
+POSE = np.tile(np.radians([0.0, -30.0, 60.0]), 4)
+
+
+def _robot():
+    return build_robot(load_robot("crr-quadruped"), "fixed")
+
+
+def test_reports_of_both_sides_of_a_networked_run(tmp_path: Path) -> None:
+    dynamics = DynamicsSide(_robot(), "force")
+    dynamics.set_pose(POSE)
+    server = DynamicsServer(dynamics, duration=30.0, folder=tmp_path / "dynamics")
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    client = ActuatorClient(ActuatorSide(_robot()), server.address, folder=tmp_path / "act")
+    try:
+        initial = client.connect()
+        experiment = make_experiment("gamma-step", client.side.robot.joint_names,
+                                     initial.joint_angles, client.side.control_step, 0.05)
+        client.run(experiment, 200, initial)
+        client.bye()
+    finally:
+        client.close()
+        server.stop()
+        thread.join(10.0)
+    for side in ("dynamics", "act"):
+        for name in ("parameters.toml", "model.xml", "summary.json", "timing.json"):
+            assert (tmp_path / side / name).is_file(), (side, name)
+        page = build_run_report(tmp_path / side).read_text(encoding="utf-8")
+        assert "Network timing" in page
+        assert page.count("data:image/png;base64") >= 3
+    act_page = (tmp_path / "act" / "report" / "report.html").read_text(encoding="utf-8")
+    assert "front right: reference and simulated angle" in act_page  # commanded leg plot
