@@ -48,3 +48,46 @@ def test_reports_of_both_sides_of_a_networked_run(tmp_path: Path) -> None:
         assert page.count("data:image/png;base64") >= 3
     act_page = (tmp_path / "act" / "report" / "report.html").read_text(encoding="utf-8")
     assert "front right: reference and simulated angle" in act_page  # commanded leg plot
+
+
+def test_ctrl_c_stops_the_dynamics_server_with_its_files(tmp_path: Path) -> None:
+    """A real SIGINT to `pneumaquad serve dynamics` in real time: exit status 130, the
+    recording and the packet files written and readable."""
+    import json
+    import signal
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    from pneumaquad.network.protocol import MessageType, encode_command
+    from pneumaquad.recording import read_recording
+
+    out = tmp_path / "served"
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    process = subprocess.Popen(
+        [sys.executable, "-c", "from pneumaquad.cli import main; main()", "serve", "dynamics",
+         "--command", "valve", "--mode", "realtime", "--port", str(port), "--record-every",
+         "10", "-o", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        csv = out / "recording.csv"
+        for sequence in range(1, 3000):  # valve commands until rows are being written
+            client.sendto(encode_command(MessageType.VALVE_COMMAND, sequence, 0.0,
+                                         np.full(12, 5.25)), ("127.0.0.1", port))
+            time.sleep(0.002)
+            if csv.is_file() and csv.stat().st_size > 20_000:
+                break
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+        client.close()
+    assert process.returncode == 130, stderr
+    recording = read_recording(out / "recording.parquet")
+    assert recording["time [s]"].size > 10
+    assert json.loads((out / "timing.json").read_text())["received [count]"] > 10
