@@ -16,11 +16,11 @@ from typing import Annotated, Any
 
 import numpy as np
 import typer
-from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 from rich.table import Table
 
 from pneumaquad.analysis import find_steps
+from pneumaquad.cli_common import ParamsOption, SetOption, console
 from pneumaquad.identification.friction import (
     FrictionPoints,
     fit_coulomb_viscous,
@@ -59,7 +59,6 @@ fit_app = typer.Typer(
     pretty_exceptions_enable=False,
     add_completion=False,
 )
-console = Console(stderr=True)
 
 RecordingsArgument = Annotated[
     list[Path],
@@ -67,13 +66,6 @@ RecordingsArgument = Annotated[
 ]
 OutputOption = Annotated[
     Path, typer.Option("--output", "-o", help="Parameter file (TOML) to write.")
-]
-ParamsOption = Annotated[
-    str, typer.Option("--params", "-p", help="Base parameter set: shipped name or TOML path.")
-]
-SetOption = Annotated[
-    list[str] | None,
-    typer.Option("--set", "-s", help="Override a base value: section.key=value (TOML value)."),
 ]
 MappingOption = Annotated[
     Path | None,

@@ -9,15 +9,12 @@ without an import cycle.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from pneumaquad.cli_common import console, progress_bar
 from pneumaquad.measured import MeasuredDataError
 from pneumaquad.params import ParameterError
 from pneumaquad.reporting.run_folder import ReportError
@@ -27,24 +24,6 @@ __all__ = ["REPORT_ERRORS", "report_command"]
 #: Exceptions that are the user's input problems: message and exit status 2.
 REPORT_ERRORS = (ReportError, ParameterError, MeasuredDataError)
 
-console = Console(stderr=True)
-
-
-@contextmanager
-def _progress(label: str) -> Iterator[Callable[[int, int], None]]:
-    columns = (
-        TextColumn(label),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total}"),
-        TimeElapsedColumn(),
-    )
-    with Progress(*columns, console=console, transient=True) as progress:
-        task = progress.add_task(label, total=None)
-
-        def update(done: int, total: int) -> None:
-            progress.update(task, completed=done, total=total)
-
-        yield update
 
 
 def _fail(error: Exception) -> None:
@@ -97,7 +76,7 @@ def report_command(
     from pneumaquad.reporting.report import build_run_report
 
     try:
-        with _progress("report") as update:
+        with progress_bar("report") as update:
             path = build_run_report(run, output, measured, mapping, time_offset, update)
     except REPORT_ERRORS as error:
         _fail(error)
@@ -109,7 +88,7 @@ def _cost_table(output: Path, params: str, repeats: int, duration: float) -> Non
     from pneumaquad.reporting.cost_table import measure_cost_table
 
     try:
-        with _progress("cost table") as update:
+        with progress_bar("cost table") as update:
             table = measure_cost_table(params, duration, repeats, progress=update)
         path = write_cost_table_report(table, output)
     except REPORT_ERRORS as error:

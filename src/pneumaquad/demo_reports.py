@@ -23,7 +23,7 @@ from pneumaquad.rig.simulate import simulate_rig
 __all__ = ["REPORT_SECTIONS", "write_lab_style_csv"]
 
 INCH = 0.0254
-PSI = 6894.757
+PSI = 6894.757293168361  # Pa per psi (lbf/in²)
 _STEP_LEVELS = [0.4 * INCH, 1.4 * INCH, 0.6 * INCH, 1.2 * INCH, 0.875 * INCH]
 
 
@@ -32,25 +32,49 @@ class Report(Protocol):
 
 
 def write_lab_style_csv(
-    recording: dict[str, np.ndarray], folder: Path, delay: float, seed: int = 1
+    recording: dict[str, np.ndarray],
+    folder: Path,
+    delay: float,
+    seed: int = 1,
+    position_noise: float = 20e-6,
+    pressure_noise: float = 300.0,
+    name: str = "lab-step-train",
+    atmosphere: float = 101325.0,
 ) -> tuple[Path, Path]:
-    """Write ``recording`` as a noisy, delayed lab CSV (ms, in, psig) and its mapping TOML."""
+    """Write a rig recording as a lab CSV (ms, in, psig) and its column-mapping TOML.
+
+    Parameters
+    ----------
+    recording : dict
+        Rig recording (SI).
+    folder : Path
+        Where ``<name>.csv`` and ``<name>-mapping.toml`` go.
+    delay : float
+        The "measured" signals lag the recording by this much [s].
+    seed : int
+        Seed of the noise.
+    position_noise, pressure_noise : float
+        Standard deviations of added white noise [m], [Pa].
+    name : str
+        File stem.
+    atmosphere : float
+        Atmospheric pressure for the gauge columns [Pa].
+    """
     generator = np.random.default_rng(seed)
-    atmosphere = 101325.0
     time = recording["time [s]"] + delay
-    position = recording["position [m]"] + generator.normal(0.0, 20e-6, time.size)
-    cap = recording["cap pressure [Pa]"] + generator.normal(0.0, 300.0, time.size)
-    rod = recording["rod pressure [Pa]"] + generator.normal(0.0, 300.0, time.size)
+    position = recording["position [m]"] + generator.normal(0.0, position_noise, time.size)
+    cap = recording["cap pressure [Pa]"] + generator.normal(0.0, pressure_noise, time.size)
+    rod = recording["rod pressure [Pa]"] + generator.normal(0.0, pressure_noise, time.size)
     data = np.column_stack(
         [time * 1e3, position / INCH, (cap - atmosphere) / PSI, (rod - atmosphere) / PSI]
     )
     folder.mkdir(parents=True, exist_ok=True)
-    csv = folder / "lab-step-train.csv"
+    csv = folder / f"{name}.csv"
     np.savetxt(csv, data, delimiter=",", header="t_ms,x_in,p_cap_psig,p_rod_psig",
-               comments="", fmt="%.10g")
-    mapping = folder / "lab-mapping.toml"
+               comments="", fmt="%.15g")
+    mapping = folder / f"{name}-mapping.toml"
     mapping.write_text(
-        "# Column mapping of lab-step-train.csv for pneumaquad.measured\n"
+        f"# Column mapping of {csv.name} for pneumaquad.measured\n"
         f"atmospheric_pressure = {atmosphere!r}\n[columns]\n"
         'time = { source = "t_ms", unit = "ms" }\n'
         'position = { source = "x_in", unit = "in" }\n'

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pneumaquad.demo_reports import write_lab_style_csv
 from pneumaquad.params import load_rig, load_robot
 from pneumaquad.rig import signals
 from pneumaquad.rig.experiment import run_rig_experiment
@@ -54,30 +55,9 @@ def write_measured_csv(
     shift: float = 0.0,
     atmosphere: float = 101325.0,
 ) -> tuple[Path, Path]:
-    """Write a recording as lab-style CSV (ms, in, psig) plus its TOML mapping.
+    """Write a recording as lab-style CSV (ms, in, psig) plus its TOML mapping, no noise.
 
     ``shift`` [s] delays the 'measured' signals: measured(t) = simulated(t - shift).
     """
-    folder.mkdir(parents=True, exist_ok=True)
-    data = np.column_stack(
-        [
-            (recording["time [s]"] + shift) * 1e3,
-            recording["position [m]"] / INCH,
-            (recording["cap pressure [Pa]"] - atmosphere) / PSI,
-            (recording["rod pressure [Pa]"] - atmosphere) / PSI,
-        ]
-    )
-    csv = folder / "measured.csv"
-    np.savetxt(
-        csv, data, delimiter=",", header="t_ms,x_in,p_cap_psig,p_rod_psig", comments="", fmt="%.15g"
-    )
-    mapping = folder / "mapping.toml"
-    mapping.write_text(
-        f"atmospheric_pressure = {atmosphere!r}\n[columns]\n"
-        'time = { source = "t_ms", unit = "ms" }\n'
-        'position = { source = "x_in", unit = "in" }\n'
-        'cap_pressure = { source = "p_cap_psig", unit = "psig" }\n'
-        'rod_pressure = { source = "p_rod_psig", unit = "psig" }\n',
-        encoding="utf-8",
-    )
-    return csv, mapping
+    return write_lab_style_csv(recording, folder, shift, position_noise=0.0,
+                               pressure_noise=0.0, name="measured", atmosphere=atmosphere)
