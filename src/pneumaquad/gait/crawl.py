@@ -1,0 +1,304 @@
+"""The lateral-sequence wave gait ("crawl") of a quadruped, as pure functions of time.
+
+Thesis 3.3: the CRR's shared-control gait moved the robot forward "without ever risking
+loss of static stability". The statically stable quadruped gait studied by McGhee & Frank
+(1968) is the *wave gait*: legs swing one at a time, a rear leg and then the front leg on
+the same side, then the rear and front legs of the other side — the **lateral sequence**
+rear_left → front_left → rear_right → front_right. Among the regular creeping gaits it
+is the one with the largest longitudinal stability margin.
+
+Phases (cycle fractions, 0 = lift-off of rear_left, β the duty factor ≥ 0.75):
+rear_left lifts at 0, front_left at 1 − β (as rear_left touches down), rear_right at 0.5,
+front_right at 1.5 − β. Each leg swings for (1 − β) of the cycle, so at most one leg is in
+the air; for β > 0.75 two four-legged phases, [2(1 − β), 0.5] and [2.5 − 2β, 1] —
+i.e. after each side's pair of swings — are left for shifting the body sideways (sway).
+Walking backwards (|heading| > 90°) swaps the roles of front and rear legs.
+
+Frames: the *body frame* has x forward, y left, z up, origin at the thorax origin, axes
+fixed to the body (which does not turn). The *ground frame* is the body frame at t = 0
+without sway, fixed to the ground. Feet stand still in the ground frame during stance;
+a swing moves the foot by one cycle's body travel on a cycloid (zero velocity and
+acceleration at lift-off and touchdown) while lifting it by (1 − cos)/2 (zero height and
+vertical speed at both ends).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .stability import stability_margin, support_polygon
+
+__all__ = [
+    "LATERAL_SEQUENCE",
+    "LEGS",
+    "CrawlGait",
+    "body_positions",
+    "foot_positions_ground",
+    "foot_targets",
+    "leg_phases",
+    "lift_off_offsets",
+    "margin_after_lift",
+    "plan_margins",
+    "refuse_lift",
+    "stance_flags",
+    "sway_for_margin",
+    "sway_shifts",
+    "swing_order",
+]
+
+Array = NDArray[np.float64]
+#: Leg order of every (..., 4, ...) array here (that of ``RobotModel.legs``).
+LEGS = ("front_left", "front_right", "rear_left", "rear_right")
+#: Swing order of the forward wave gait (McGhee & Frank's lateral sequence).
+LATERAL_SEQUENCE = ("rear_left", "front_left", "rear_right", "front_right")
+
+
+@dataclasses.dataclass(frozen=True)
+class CrawlGait:
+    """Parameters of a lateral-sequence wave gait.
+
+    Attributes
+    ----------
+    neutral_feet : (4, 3) array [m]
+        Foot positions in the body frame at the middle of stance, in :data:`LEGS` order
+        (z: minus the body height).
+    duty_factor : float
+        β, fraction of the cycle each leg is in stance, 0.75 ≤ β < 1.
+    period : float [s]
+        Cycle period T.
+    stride : float [m]
+        Distance a stance foot travels relative to the body (= body travel per stance).
+    step_height : float [m]
+        Foot lift at mid-swing.
+    heading : float [rad]
+        Direction of travel in the body frame (0 forward, π/2 left); the body does not turn.
+    sway : float
+        Fraction of the sideways body shift towards the support triangles' incentres
+        (0: no sway, 1: the centre of mass over the incentres' mean lateral position).
+    com_offset : (2,) array [m]
+        Ground projection of the centre of mass in the body frame.
+    """
+
+    neutral_feet: Array
+    duty_factor: float = 0.8
+    period: float = 4.0
+    stride: float = 0.1
+    step_height: float = 0.04
+    heading: float = 0.0
+    sway: float = 1.0
+    com_offset: Array = dataclasses.field(default_factory=lambda: np.zeros(2))
+
+    def __post_init__(self) -> None:
+        feet = np.array(self.neutral_feet, dtype=float)
+        if feet.shape != (4, 3):
+            raise ValueError(f"neutral_feet must have shape (4, 3), got {feet.shape}")
+        object.__setattr__(self, "neutral_feet", feet)
+        object.__setattr__(self, "com_offset", np.array(self.com_offset, dtype=float))
+        if not 0.75 <= self.duty_factor < 1.0:
+            raise ValueError(f"duty factor {self.duty_factor} must be in [0.75, 1)")
+        if self.period <= 0.0 or self.stride < 0.0 or self.step_height < 0.0:
+            raise ValueError("period must be positive, stride and step height non-negative")
+        if self.sway != 0.0 and self.duty_factor <= 0.75:
+            raise ValueError("body sway needs four-legged phases: duty factor > 0.75")
+
+    @property
+    def speed(self) -> float:
+        """Body speed [m/s]: stride / (β T)."""
+        return self.stride / (self.duty_factor * self.period)
+
+    @property
+    def direction(self) -> Array:
+        """Unit direction of travel (2,) in the body frame."""
+        return np.array([math.cos(self.heading), math.sin(self.heading)])
+
+
+def lift_off_offsets(duty_factor: float, backward: bool = False) -> Array:
+    """Lift-off time of each leg (:data:`LEGS` order) as a cycle fraction in [0, 1)."""
+    swing = 1.0 - duty_factor
+    rear_left, front_left, rear_right, front_right = 0.0, swing, 0.5, 0.5 + swing
+    if backward:  # the front legs lead: front_left → rear_left → front_right → rear_right
+        front_left, rear_left, front_right, rear_right = 0.0, swing, 0.5, 0.5 + swing
+    return np.array([front_left, front_right, rear_left, rear_right])
+
+
+def _offsets(gait: CrawlGait) -> Array:
+    return lift_off_offsets(gait.duty_factor, backward=math.cos(gait.heading) < 0.0)
+
+
+def swing_order(gait: CrawlGait) -> tuple[str, ...]:
+    """Leg names in the order they swing, starting with the first lift-off of a cycle."""
+    return tuple(LEGS[k] for k in np.argsort(_offsets(gait), kind="stable"))
+
+
+def leg_phases(gait: CrawlGait, times: ArrayLike) -> Array:
+    """Phase (n, 4) in [0, 1) of each leg since its lift-off, at ``times`` (n,) [s]."""
+    cycles = np.asarray(times, dtype=float)[..., None] / gait.period - _offsets(gait)
+    return cycles - np.floor(cycles)
+
+
+def stance_flags(gait: CrawlGait, times: ArrayLike) -> NDArray[np.bool_]:
+    """True (n, 4) where a leg is in stance (a touching-down foot counts as stance)."""
+    return leg_phases(gait, times) >= 1.0 - gait.duty_factor
+
+
+def foot_positions_ground(gait: CrawlGait, times: ArrayLike) -> Array:
+    """Feet (n, 4, 3) [m] in the ground frame: xy on the ground, z = height above it."""
+    times = np.asarray(times, dtype=float)
+    swing = 1.0 - gait.duty_factor
+    cycles = times[..., None] / gait.period - _offsets(gait)
+    count = np.floor(cycles)
+    phase = cycles - count
+    touchdown = (count + _offsets(gait) + swing) * gait.period  # of the current cycle
+    travel = gait.speed * gait.period  # per cycle = stride / β
+    along = 0.5 * gait.stride + gait.speed * touchdown  # foothold along the direction
+    progress = np.clip(phase / swing, 0.0, 1.0)
+    in_swing = phase < swing
+    cycloid = progress - np.sin(2.0 * math.pi * progress) / (2.0 * math.pi)
+    along = np.where(in_swing, along - travel * (1.0 - cycloid), along)
+    lift = np.where(in_swing, 0.5 * gait.step_height * (1.0 - np.cos(2.0 * math.pi * progress)),
+                    0.0)
+    feet = np.empty((*times.shape, 4, 3))
+    feet[..., :2] = gait.neutral_feet[:, :2] + along[..., None] * gait.direction
+    feet[..., 2] = lift
+    return feet
+
+
+def _smoothstep(fraction: Array) -> Array:
+    x = np.clip(fraction, 0.0, 1.0)
+    return x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
+
+
+def _incentre(triangle: Array) -> Array:
+    opposite = np.linalg.norm(np.roll(triangle, -1, axis=0) - np.roll(triangle, -2, axis=0),
+                              axis=1)
+    return opposite @ triangle / opposite.sum()
+
+
+def sway_shifts(gait: CrawlGait) -> Array:
+    """Sideways body shift [m] (body y) while the first and while the second side swings.
+
+    For each swing, the incentre of the support triangle of the other three feet at
+    mid-swing (planned without sway); a side's shift puts the centre of mass over the
+    mean lateral position of its two swings' incentres, times ``gait.sway``.
+    """
+    still = dataclasses.replace(gait, sway=0.0)
+    offsets = _offsets(gait)
+    swing = 1.0 - gait.duty_factor
+    shifts = np.zeros(2)
+    for side, first in enumerate((0.0, 0.5)):
+        lateral = []
+        for start in (first, first + swing):
+            time = (start + 0.5 * swing) * gait.period
+            leg = int(np.argmin(np.abs(offsets - start)))
+            feet = foot_targets(still, np.array([time]))[0, :, :2]
+            lateral.append(_incentre(np.delete(feet, leg, axis=0))[1])
+        shifts[side] = gait.sway * (np.mean(lateral) - gait.com_offset[1])
+    return shifts
+
+
+def _lateral_sway(gait: CrawlGait, times: Array) -> Array:
+    if gait.sway == 0.0:
+        return np.zeros_like(times)
+    first, second = sway_shifts(gait)
+    pair = 2.0 * (1.0 - gait.duty_factor)  # one side's two swings
+    window = 0.5 - pair  # four-legged phase
+    cycle = np.mod(times / gait.period, 1.0)
+    to_second = first + (second - first) * _smoothstep((cycle - pair) / window)
+    to_first = second + (first - second) * _smoothstep((cycle - 0.5 - pair) / window)
+    return np.where(cycle < 0.5, to_second, to_first)
+
+
+def body_positions(gait: CrawlGait, times: ArrayLike) -> Array:
+    """Body origin (n, 2) [m] in the ground frame: travel at ``gait.speed`` plus sway."""
+    times = np.asarray(times, dtype=float)
+    position = gait.speed * times[..., None] * gait.direction
+    position[..., 1] += _lateral_sway(gait, times)
+    return position
+
+
+def foot_targets(gait: CrawlGait, times: ArrayLike) -> Array:
+    """Feet (n, 4, 3) [m] in the body frame at ``times`` (n,) [s] (body travel and sway)."""
+    feet = foot_positions_ground(gait, times)
+    feet[..., :2] -= body_positions(gait, times)[..., None, :]
+    feet[..., 2] += gait.neutral_feet[:, 2]
+    return feet
+
+
+def plan_margins(gait: CrawlGait, times: ArrayLike | None = None,
+                 samples: int = 200) -> tuple[Array, Array]:
+    """Static stability margin [m] of the plan (body and feet as planned, no dynamics).
+
+    Parameters
+    ----------
+    gait : CrawlGait
+    times : (n,) array [s], optional
+        Default: ``samples`` instants over one cycle.
+    samples : int
+
+    Returns
+    -------
+    times : (n,) [s]
+    margins : (n,) [m]
+        Signed distance of ``gait.com_offset`` to the stance feet's support polygon.
+    """
+    if times is None:
+        times = np.linspace(0.0, gait.period, samples, endpoint=False)
+    times = np.asarray(times, dtype=float)
+    feet = foot_targets(gait, times)[..., :2]
+    stance = stance_flags(gait, times)
+    margins = np.array([
+        stability_margin(gait.com_offset, support_polygon(feet[k][stance[k]]))
+        for k in range(times.size)
+    ])
+    return times, margins
+
+
+def sway_for_margin(gait: CrawlGait, minimum_margin: float, samples: int = 200,
+                    iterations: int = 30) -> CrawlGait:
+    """The gait with the least sway (fraction in [0, 1], bisection) whose planned static
+    margin over a cycle is at least ``minimum_margin`` [m] (small sways spare the legs'
+    sideways reach).
+
+    Raises
+    ------
+    ValueError
+        If even full sway (``sway=1``) stays below ``minimum_margin``.
+    """
+    def least(sway: float) -> float:
+        return float(plan_margins(dataclasses.replace(gait, sway=sway),
+                                  samples=samples)[1].min())
+
+    if gait.duty_factor > 0.75 and least(1.0) < minimum_margin:
+        raise ValueError(f"full sway gives {1e3 * least(1.0):.1f} mm < "
+                         f"{1e3 * minimum_margin:.1f} mm")
+    if least(0.0) >= minimum_margin:
+        return dataclasses.replace(gait, sway=0.0)
+    if gait.duty_factor <= 0.75:
+        raise ValueError("body sway needs four-legged phases: duty factor > 0.75")
+    low, high = 0.0, 1.0
+    for _ in range(iterations):
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if least(middle) >= minimum_margin else (middle, high)
+    return dataclasses.replace(gait, sway=high)
+
+
+def margin_after_lift(feet_xy: ArrayLike, stance: ArrayLike, leg: int,
+                      com_xy: ArrayLike) -> float:
+    """Static margin [m] with ``leg`` (index) lifted from the ``stance`` (4,) feet (4, 2)."""
+    remaining = np.array(stance, dtype=bool)
+    remaining[leg] = False
+    if not remaining.any():
+        return -math.inf
+    feet = np.asarray(feet_xy, dtype=float)[remaining]
+    return float(stability_margin(np.asarray(com_xy, dtype=float), support_polygon(feet)))
+
+
+def refuse_lift(feet_xy: ArrayLike, stance: ArrayLike, leg: int, com_xy: ArrayLike,
+                minimum_margin: float = 0.0) -> bool:
+    """Shared control (thesis 3.3): True if lifting ``leg`` now would leave the margin
+    below ``minimum_margin`` [m] (default: the centre of mass outside the support)."""
+    return margin_after_lift(feet_xy, stance, leg, com_xy) < minimum_margin

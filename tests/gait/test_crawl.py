@@ -1,0 +1,118 @@
+"""The lateral-sequence wave gait: timing, foot paths, body sway and shared-control lifts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pneumaquad.gait.crawl import (
+    LATERAL_SEQUENCE,
+    LEGS,
+    CrawlGait,
+    body_positions,
+    foot_positions_ground,
+    foot_targets,
+    leg_phases,
+    plan_margins,
+    refuse_lift,
+    stance_flags,
+    sway_for_margin,
+    swing_order,
+)
+
+FEET = np.array([[0.375, 0.28, -0.38], [0.375, -0.28, -0.38],
+                 [-0.375, 0.28, -0.38], [-0.375, -0.28, -0.38]])  # LEGS order
+PERIOD = 4.0
+# Instants over 3 cycles: a 1 ms grid (exact in binary fractions of the cycle).
+TIMES = np.arange(0, 3 * 4000) * 1e-3
+
+
+@pytest.mark.parametrize("duty_factor", [0.75, 0.8, 0.9])
+def test_duty_factor_and_one_leg_in_the_air(duty_factor):
+    gait = CrawlGait(FEET, duty_factor=duty_factor, period=PERIOD, sway=0.0)
+    stance = stance_flags(gait, TIMES)
+    assert np.allclose(stance.mean(axis=0), duty_factor, atol=1e-9)
+    assert (~stance).sum(axis=1).max() == 1
+
+
+def test_swing_order_is_the_lateral_sequence():
+    gait = CrawlGait(FEET, period=PERIOD)
+    assert swing_order(gait) == LATERAL_SEQUENCE
+    stance = stance_flags(gait, TIMES[:4000])
+    lift_offs = [int(np.flatnonzero(~stance[:, LEGS.index(leg)])[0]) for leg in LEGS]
+    assert tuple(LEGS[k] for k in np.argsort(lift_offs)) == LATERAL_SEQUENCE
+    assert swing_order(CrawlGait(FEET, heading=np.pi, sway=0.0))[0] == "front_left"
+
+
+@pytest.mark.parametrize("sway", [0.0, 1.0])
+@pytest.mark.parametrize("heading", [0.0, 0.6])
+def test_stance_feet_stand_still_on_the_ground(sway, heading):
+    gait = CrawlGait(FEET, period=PERIOD, stride=0.12, sway=sway, heading=heading)
+    targets = foot_targets(gait, TIMES)
+    ground = targets[..., :2] + body_positions(gait, TIMES)[:, None, :]
+    stance = stance_flags(gait, TIMES)
+    assert np.allclose(ground, foot_positions_ground(gait, TIMES)[..., :2])
+    travel = np.diff(body_positions(gait, TIMES[[0, 4000]]), axis=0)[0]  # one cycle
+    assert np.allclose(travel, 0.12 / 0.8 * gait.direction, atol=1e-12)  # sway periodic
+    for k in range(4):
+        still = stance[1:, k] & stance[:-1, k]
+        steps = np.linalg.norm(np.diff(ground[:, k], axis=0), axis=1)
+        assert steps[still].max() < 1e-12
+        assert np.all(targets[stance[:, k], k, 2] == FEET[k, 2])
+
+
+def test_swing_lifts_and_lands_smoothly():
+    gait = CrawlGait(FEET, period=PERIOD, stride=0.1, step_height=0.05)
+    step = 1e-3
+    times = np.arange(0, 4000) * step
+    heights = foot_positions_ground(gait, times)[..., 2]
+    phases = leg_phases(gait, times)
+    swing = 1.0 - gait.duty_factor
+    assert heights.max() == pytest.approx(0.05, rel=1e-6)
+    assert heights.min() == 0.0
+    for edge in (0.0, swing):  # lift-off and touchdown: height and vertical speed ~ 0
+        near = np.abs(phases - edge) < 2e-3
+        assert heights[near].max() < 1e-4
+    vertical_speed = np.abs(np.diff(heights, axis=0)) / step
+    assert vertical_speed.max() < 1.1 * np.pi * 0.05 / (swing * PERIOD)
+    ground = foot_positions_ground(gait, times)[..., :2]
+    foot_speed = np.linalg.norm(np.diff(ground, axis=0), axis=-1) / step
+    assert foot_speed.max() < 2.1 * gait.speed / swing  # no jumps (cycloid peak: 2 v_mean)
+
+
+def test_margin_without_sway_is_small_and_zero_at_three_quarters():
+    _, margins = plan_margins(CrawlGait(FEET, duty_factor=0.75, stride=0.1, sway=0.0))
+    assert margins.min() == pytest.approx(0.0, abs=1e-12)
+    _, margins = plan_margins(CrawlGait(FEET, duty_factor=0.8, stride=0.1, sway=0.0))
+    assert 0.0 < margins.min() < 0.01
+
+
+def test_sway_for_margin_meets_the_minimum():
+    gait = sway_for_margin(CrawlGait(FEET, stride=0.1), 0.04)
+    assert 0.0 < gait.sway < 1.0
+    _, margins = plan_margins(gait, samples=800)
+    assert margins.min() >= 0.04 - 1e-4
+    with pytest.raises(ValueError, match="full sway"):
+        sway_for_margin(CrawlGait(FEET, stride=0.1), 0.5)
+
+
+def test_invalid_gaits_are_refused():
+    with pytest.raises(ValueError, match="duty factor"):
+        CrawlGait(FEET, duty_factor=0.7)
+    with pytest.raises(ValueError, match="sway"):
+        CrawlGait(FEET, duty_factor=0.75, sway=1.0)
+
+
+def test_refuse_lift_keeps_the_centre_of_mass_supported():
+    feet = FEET[:, :2]
+    stance = np.ones(4, dtype=bool)
+    centre = np.zeros(2)
+    # Centre of mass on the diagonal: every lift leaves it on the boundary (margin 0).
+    assert not refuse_lift(feet, stance, LEGS.index("rear_left"), centre)
+    right = np.array([0.0, -0.1])  # shifted to the right
+    assert refuse_lift(feet, stance, LEGS.index("front_right"), right)
+    assert not refuse_lift(feet, stance, LEGS.index("rear_left"), right)
+    assert refuse_lift(feet, stance, LEGS.index("rear_left"), right, minimum_margin=0.1)
+    three = stance.copy()
+    three[LEGS.index("rear_left")] = False
+    assert refuse_lift(feet, three, LEGS.index("front_left"), right)  # two feet: a line
