@@ -299,8 +299,10 @@ def _register_robot_commands() -> None:
     from pneumaquad.cli_report import report_command
     from pneumaquad.cli_robot import leg_app, robot_app, video_command
     from pneumaquad.cli_serve import serve_app
+    from pneumaquad.console.cli import console_command
 
     app.add_typer(fit_app, name="fit")
+    app.command("console")(console_command)
     app.command("report")(report_command)
     app.add_typer(leg_app, name="leg")
     app.add_typer(robot_app, name="robot")

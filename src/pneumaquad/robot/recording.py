@@ -3,7 +3,9 @@
 Columns are named ``quantity [unit]``; per-joint columns start with the joint name
 (``"front_right_gamma angle [rad]"``), per-leg columns with the leg name. A joint's
 ``control mode [-]`` is 0 with its valve held at the offset, 1 under closed-loop control
-and 2 with an open-loop valve voltage.
+and 2 with an open-loop valve voltage. ``stability margin [m]`` is the signed distance of
+the centre-of-mass projection to the support polygon of the feet carrying load (positive
+inside; NaN with no foot on the ground), the static stability margin of a crawl gait.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from pneumaquad.gait.stability import stability_margin, support_polygon
 from pneumaquad.layout import (
     O_PNEUMATIC_FORCE,
     P_R,
@@ -43,6 +46,9 @@ JOINT_QUANTITIES = (
 _THORAX = ("thorax x [m]", "thorax y [m]", "thorax z [m]", "thorax roll [rad]",
            "thorax pitch [rad]", "thorax yaw [rad]")
 _SUPPLY = ("supply pressure [Pa]", "air consumed [kg]", "air consumed [NL]")
+_BALANCE = ("centre of mass x [m]", "centre of mass y [m]", "stability margin [m]")
+#: A foot carrying more than this normal force [N] counts as in stance.
+STANCE_FORCE = 1.0
 
 
 def recording_columns(simulation: RobotSimulation) -> tuple[str, ...]:
@@ -56,6 +62,7 @@ def recording_columns(simulation: RobotSimulation) -> tuple[str, ...]:
         columns += [f"{leg} foot x [m]", f"{leg} foot y [m]", f"{leg} foot z [m]",
                     f"{leg} foot normal force [N]"]
     columns += list(_SUPPLY)
+    columns += list(_BALANCE)
     return tuple(columns)
 
 
@@ -98,8 +105,18 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
         ]
     ).ravel()
     thorax = np.concatenate([s.data.xpos[robot.thorax_id], thorax_attitude(s)])
-    feet = np.column_stack([s.foot_positions(), s.foot_normal_forces()]).ravel()
+    foot_positions = s.foot_positions()
+    foot_forces = s.foot_normal_forces()
+    feet = np.column_stack([foot_positions, foot_forces]).ravel()
     air = s.air_consumed()
     normal_litres = air * s.params[0, P_R] * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
     supply = np.array([s.supply_pressure(), air, normal_litres])
-    return np.concatenate([[s.time], per_joint, thorax, feet, supply])
+    com = s.data.subtree_com[0, :2]
+    stance = foot_forces > STANCE_FORCE
+    margin = (
+        float(stability_margin(com, support_polygon(foot_positions[stance, :2])))
+        if stance.any()
+        else np.nan
+    )
+    balance = np.array([com[0], com[1], margin])
+    return np.concatenate([[s.time], per_joint, thorax, feet, supply, balance])

@@ -1,0 +1,248 @@
+"""The operator console: a viser server around one :class:`RobotSimulation`.
+
+The console is a thin layer: the physics, control and kinematics live in
+:mod:`pneumaquad.robot`; here a background thread steps the simulation in chunks
+(20 ms of simulated time by default, optionally paced to real time), copies the state
+into the 3-D scene (:mod:`.scene`) and the GUI (:mod:`.gui`), and the GUI handlers call
+the public methods of :class:`ConsoleApp` (start, pause, reset, step, rebuild, supply
+pressure, gain scales, teleoperation).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Sequence
+
+import numpy as np
+import viser
+
+from pneumaquad.layout import P_PATM, P_PS
+from pneumaquad.params import load_robot
+from pneumaquad.robot.builder import build_robot
+from pneumaquad.robot.errors import SimulationDivergedError
+from pneumaquad.robot.scenarios import STANDING_ANGLES, standing_height
+from pneumaquad.robot.simulation import RobotSimulation
+
+from .gui import ConsoleControls
+from .scene import RobotScene
+from .teleop import FootTeleoperation
+
+__all__ = ["ConsoleApp", "initial_pose"]
+
+#: Extra clearance of the feet above the ground at reset [m].
+_DROP_CLEARANCE = 0.003
+
+
+def initial_pose(simulation: RobotSimulation) -> np.ndarray:
+    """Put ``simulation`` in the console's reset pose; return its joint angles [rad].
+
+    Every leg at the standing angles of :mod:`pneumaquad.robot.scenarios`; a free robot
+    is placed with its feet just above flat ground; all joints closed-loop at that pose.
+    """
+    robot = simulation.robot
+    angles = np.tile(STANDING_ANGLES, len(robot.legs))
+    if robot.free:
+        height = standing_height(simulation, STANDING_ANGLES) + _DROP_CLEARANCE
+        simulation.set_pose(angles, thorax_position=np.array([0.0, 0.0, height]))
+    else:
+        simulation.set_pose(angles)
+    simulation.command_angles(angles)
+    return angles
+
+
+class ConsoleApp:
+    """Browser console: live 3-D robot, run controls, pneumatics, teleoperation, plots.
+
+    Parameters
+    ----------
+    params : str
+        Robot parameter set name or TOML path.
+    configuration : {"quadruped", "fixed", "testbed"}
+    environment : {"flat", "block", "ramp", "rough"}
+    host : str
+        Interface to bind; loopback by default (the console has no authentication).
+    port : int
+        TCP port; 0 picks a free one (see :attr:`port`).
+    overrides : sequence of str
+        ``--set``-style parameter overrides.
+    chunk : float
+        Simulated time per chunk [s] between scene/GUI updates.
+    real_time : bool
+        Pace the simulation to the wall clock (else run as fast as it goes).
+    """
+
+    def __init__(self, params: str = "crr-quadruped", configuration: str = "quadruped",
+                 environment: str = "flat", host: str = "127.0.0.1", port: int = 8080,
+                 overrides: Sequence[str] = (), chunk: float = 0.02,
+                 real_time: bool = True) -> None:
+        self.params = params
+        self.overrides = list(overrides)
+        self.chunk = chunk
+        self.real_time = real_time
+        self.running = False
+        self.message = ""
+        self.lock = threading.RLock()
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.server.scene.set_up_direction("+z")
+        self.server.initial_camera.position = (1.1, -1.3, 0.9)
+        self.server.initial_camera.look_at = (0.0, 0.0, 0.25)
+        self.scene: RobotScene | None = None
+        self.teleop: FootTeleoperation | None = None
+        self._build(configuration, environment)
+        self.controls = ConsoleControls(self)
+        self.refresh()
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="console-sim", daemon=True)
+        self._thread.start()
+
+    # --- model -----------------------------------------------------------------------
+    def _build(self, configuration: str, environment: str) -> None:
+        parameters = load_robot(self.params, self.overrides)
+        robot = build_robot(parameters, configuration, environment)
+        simulation = RobotSimulation(robot)
+        if self.scene is not None:
+            self.scene.remove()
+        if self.teleop is not None:
+            self.teleop.remove()
+        self.configuration, self.environment = configuration, environment
+        self.simulation = simulation
+        self.home_angles = initial_pose(simulation)
+        self.initial_supply = simulation.supply_pressure()  # tank or regulated [Pa]
+        self.base_gain_scale = simulation.base_gain_scale.copy()
+        self.chunk_steps = max(1, round(self.chunk / simulation.control_step))
+        self.scene = RobotScene(self.server, robot)
+        self.teleop = FootTeleoperation(self.server, simulation, self.home_angles,
+                                        lock=self.lock)
+
+    def rebuild(self, configuration: str, environment: str) -> None:
+        """Build a new model (configuration/environment), keeping supply and gain settings."""
+        with self.lock:
+            self.running = False
+            supply = self.supply_gauge_pressure()
+            scales = {t: self.gain_scale_of(t) for t in ("alpha", "beta", "gamma")}
+            self._build(configuration, environment)
+            self.set_supply_pressure(supply)
+            for joint_type, scale in scales.items():
+                self.set_gain_scale(joint_type, scale)
+            self.controls.clear_history()
+            self.refresh()
+
+    # --- run control -----------------------------------------------------------------
+    @property
+    def port(self) -> int:
+        """The TCP port the server listens on."""
+        return int(self.server.get_port())
+
+    @property
+    def host(self) -> str:
+        """The interface the server is bound to."""
+        return str(self.server.get_host())
+
+    def start(self) -> None:
+        """Run the simulation continuously."""
+        self.running = True
+        self.message = ""
+        self._wake.set()
+
+    def pause(self) -> None:
+        """Stop stepping (the state is kept)."""
+        self.running = False
+        self.refresh()
+
+    def step_once(self) -> None:
+        """Advance one chunk (paused or not)."""
+        self.advance()
+
+    def reset(self) -> None:
+        """Back to the reset pose, time 0, air counter 0; styluses back home."""
+        with self.lock:
+            self.running = False
+            self.home_angles = initial_pose(self.simulation)
+            self.teleop.reset()
+            self.controls.clear_history()
+            self.refresh()
+
+    def advance(self, steps: int | None = None) -> None:
+        """Advance ``steps`` control steps (one chunk by default) and refresh the views."""
+        with self.lock:
+            try:
+                self.simulation.step(self.chunk_steps if steps is None else steps)
+            except SimulationDivergedError as error:
+                self.running = False
+                self.message = str(error)
+                initial_pose(self.simulation)
+            self.refresh()
+
+    def refresh(self) -> None:
+        """Copy the simulation state into the scene and the GUI."""
+        with self.lock:
+            data = self.simulation.data
+            self.scene.update(data)
+            thorax = self.simulation.robot.thorax_id
+            self.teleop.follow_thorax(data.xpos[thorax].copy(), data.xquat[thorax].copy())
+            self.controls.update()
+
+    def _loop(self) -> None:
+        wall_start, sim_start = time.perf_counter(), self.simulation.time
+        while not self._stop.is_set():
+            if not self.running:
+                self._wake.wait(0.05)
+                self._wake.clear()
+                wall_start, sim_start = time.perf_counter(), self.simulation.time
+                continue
+            self.advance()
+            if self.real_time:
+                ahead = (self.simulation.time - sim_start) - (time.perf_counter() - wall_start)
+                if ahead > 0:
+                    time.sleep(ahead)
+                elif ahead < -0.5:  # fell behind: do not try to catch up
+                    wall_start, sim_start = time.perf_counter(), self.simulation.time
+
+    def close(self) -> None:
+        """Stop the simulation thread and the server."""
+        self._stop.set()
+        self._wake.set()
+        self._thread.join(timeout=5.0)
+        self.server.stop()
+
+    # --- pneumatics and control ------------------------------------------------------
+    def supply_gauge_pressure(self) -> float:
+        """Regulated supply pressure [Pa, gauge] of the cylinders."""
+        params = self.simulation.params
+        return float(params[0, P_PS] - params[0, P_PATM])
+
+    def set_supply_pressure(self, gauge_pressure: float) -> None:
+        """Set the regulated supply pressure [Pa, gauge] of every cylinder, live."""
+        with self.lock:
+            params = self.simulation.params
+            params[:, P_PS] = params[:, P_PATM] + gauge_pressure
+
+    def gain_scale_of(self, joint_type: str) -> float:
+        """Operator gain scale of ``joint_type`` (1 = the parameter file's gains)."""
+        simulation = self.simulation
+        index = simulation.robot.joint_types.index(joint_type)
+        return float(simulation.base_gain_scale[index] / self.base_gain_scale[index])
+
+    def set_gain_scale(self, joint_type: str, scale: float) -> None:
+        """Scale Kp, Ki, Kd of every ``joint_type`` controller by ``scale``, live."""
+        with self.lock:
+            simulation = self.simulation
+            mask = np.array([t == joint_type for t in simulation.robot.joint_types])
+            simulation.base_gain_scale[mask] = self.base_gain_scale[mask] * scale
+            simulation.gain_scale[mask] = simulation.base_gain_scale[mask]
+
+    def set_mapping(self, scale: float | None = None,
+                    shift: Sequence[float] | None = None, enabled: bool | None = None) -> None:
+        """Change the stylus-to-foot mapping (scale, offset shift [m]) or enable it."""
+        with self.lock:
+            if scale is not None:
+                self.teleop.scale = float(scale)
+            if shift is not None:
+                self.teleop.shift = np.asarray(shift, dtype=float)
+            if enabled is not None:
+                self.teleop.enabled = bool(enabled)
+                if not enabled:
+                    self.simulation.command_angles(self.home_angles)
+            self.teleop.apply_all()

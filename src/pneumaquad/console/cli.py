@@ -1,0 +1,78 @@
+"""``pneumaquad console``: start the operator console in the browser.
+
+Register with ``app.command("console")(console_command)`` in :mod:`pneumaquad.cli`.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Annotated
+
+import typer
+
+from pneumaquad.cli_common import SetOption, console
+from pneumaquad.interruption import deferred_interrupt
+
+__all__ = ["console_command", "serve_console"]
+
+
+def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped",
+                  environment: str = "flat", host: str = "127.0.0.1", port: int = 8080,
+                  duration: float | None = None, overrides: list[str] | None = None,
+                  start: bool = False) -> None:
+    """Run the console until Ctrl-C (or for ``duration`` wall seconds), then stop cleanly.
+
+    Parameters
+    ----------
+    params, configuration, environment, host, port, overrides
+        See :class:`pneumaquad.console.app.ConsoleApp`.
+    duration : float, optional
+        Wall-clock seconds to serve before stopping (tests, demos); forever by default.
+    start : bool
+        Start the simulation immediately instead of paused.
+    """
+    from .app import ConsoleApp
+
+    app = ConsoleApp(params, configuration, environment, host=host, port=port,
+                     overrides=overrides or [])
+    shown = "localhost" if app.host in ("127.0.0.1", "::1") else app.host
+    console.print(f"Operator console on http://{shown}:{app.port} (Ctrl-C stops)")
+    if app.host not in ("127.0.0.1", "::1", "localhost"):
+        console.print(f"[yellow]warning:[/] bound to {app.host}: anyone who can reach this "
+                      "port can drive the simulation (no authentication)")
+    if start:
+        app.start()
+    deadline = None if duration is None else time.monotonic() + duration
+    try:
+        with deferred_interrupt() as stop:
+            while not stop.requested and (deadline is None or time.monotonic() < deadline):
+                time.sleep(0.1)
+    except KeyboardInterrupt:  # a second Ctrl-C
+        pass
+    finally:
+        app.close()
+    console.print("Console stopped.")
+
+
+def console_command(
+    params: Annotated[
+        str, typer.Option("--params", "-p", help="Robot parameter set name or TOML path.")
+    ] = "crr-quadruped",
+    configuration: Annotated[
+        str, typer.Option("--configuration", "-c", help="quadruped, fixed or testbed.")
+    ] = "quadruped",
+    environment: Annotated[
+        str, typer.Option("--environment", "-e", help="flat, block, ramp or rough.")
+    ] = "flat",
+    host: Annotated[
+        str, typer.Option(help="Interface to bind (loopback by default; no authentication).")
+    ] = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="TCP port (0: any free port).")] = 8080,
+    duration: Annotated[
+        float | None, typer.Option(help="Stop after this many wall-clock seconds.")
+    ] = None,
+    start: Annotated[bool, typer.Option("--start/--paused", help="Run at once.")] = False,
+    overrides: SetOption = None,
+) -> None:
+    """Operator console in the browser: live 3-D robot, run controls, teleoperation."""
+    serve_console(params, configuration, environment, host, port, duration, overrides, start)
