@@ -41,7 +41,7 @@ def _simulation(params: str, overrides: list[str] | None, configuration: str,
 
 
 def _run(simulation, phases, folder_option: Path | None, kind: str, description: str,
-         video: bool, joints: list[str] | None = None) -> None:
+         video: bool, joints: list[str] | None = None) -> Path:
     from pneumaquad.recording import create_run_folder
     from pneumaquad.robot.experiment import run_phases
     from pneumaquad.robot.plots import plot_body, plot_joints
@@ -78,6 +78,7 @@ def _run(simulation, phases, folder_option: Path | None, kind: str, description:
                           highlight=False)
     if summary.get("interrupted"):
         finish_run(folder, summary)
+    return folder
 
 
 def _check_environment(environment: str) -> None:
@@ -205,6 +206,58 @@ def robot_stand(
     phases = stand_up_phases(simulation, hold=hold, posture=posture)
     _run(simulation, phases, output, f"{configuration}-stand",
          f"{configuration}: stand up and hold", video)
+
+
+@robot_app.command("walk")
+def robot_walk(
+    distance: Annotated[float, typer.Option(min=0.01, help="Distance to walk [m].")] = 1.0,
+    speed: Annotated[float, typer.Option(min=0.001, help="Body speed [m/s].")] = 0.03,
+    heading: Annotated[float, typer.Option(help="Walking direction, CCW from forward [deg].")]
+    = 0.0,
+    duty_factor: Annotated[float, typer.Option(min=0.75, max=0.99, help="Stance fraction.")]
+    = 0.8,
+    period: Annotated[float, typer.Option(min=0.5, help="Gait cycle [s].")] = 4.0,
+    margin: Annotated[float, typer.Option(min=0.0, help="Planned static margin [m].")] = 0.04,
+    environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
+    seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    video: VideoOption = True,
+) -> None:
+    """The quadruped stands up and walks a statically stable crawl (lateral-sequence wave
+    gait, duty factor >= 0.75); reports success or failure with the reason."""
+    import json
+    import math
+
+    from pneumaquad.robot.walking import WalkSettings, walking_outcome, walking_phases
+
+    _check_environment(environment)
+    settings = WalkSettings(speed=speed, heading=math.radians(heading),
+                            duty_factor=duty_factor, period=period, minimum_margin=margin,
+                            distance=distance)
+    simulation = _simulation(params, overrides, "quadruped", environment, seed)
+    phases, plan = walking_phases(simulation, settings)
+    folder = _run(simulation, phases, output, f"walk-{environment}",
+                  f"quadruped: walk {distance:g} m on {environment}", video)
+    from pneumaquad.recording import read_recording
+
+    summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+    outcome = walking_outcome(read_recording(folder), summary, settings, simulation.robot)
+    outcome["planned smallest static margin [m]"] = float(plan.margins.min())
+    outcome["planned unreachable IK samples [count]"] = int(
+        sum(plan.cycle.unreachable_counts.values())
+        if isinstance(plan.cycle.unreachable_counts, dict)
+        else np.sum(plan.cycle.unreachable_counts)
+    )
+    summary["walking"] = outcome
+    (folder / "summary.json").write_text(json.dumps(summary, indent=2, default=str),
+                                         encoding="utf-8")
+    verdict = "success" if outcome["success"] else "failure"
+    console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
+                  f"travelled {outcome['distance travelled [m]']:.3f} m of {distance:g} m, "
+                  f"air {outcome['air per metre [NL/m]']:.3g} NL/m, smallest margin "
+                  f"{outcome['smallest static margin [m]'] * 1000:.0f} mm")
 
 
 @robot_app.command("export")

@@ -1,0 +1,164 @@
+"""The quadruped walking with the crawl gait on its 12 pneumatic joints.
+
+:func:`walking_phases` stands the robot up (:func:`.scenarios.stand_up_phases`), moves it
+to the walking pose, then plays the lateral-sequence wave gait of
+:mod:`pneumaquad.gait` (duty factor ≥ 0.75, body sway to a planned static margin) as
+joint references; :func:`walking_outcome` judges the run honestly: how far the robot
+went, whether it fell, slipped, hit a joint limit, or lost static stability.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pneumaquad.gait.walk import WalkPlan, plan_walk, robot_gait
+
+from .builder import RobotModel
+from .experiment import Phase
+from .scenarios import stand_up_phases
+from .simulation import RobotSimulation
+
+__all__ = ["WALKING_ANGLES", "WalkSettings", "walking_outcome", "walking_phases"]
+
+#: Alpha, beta, gamma [rad] the gait is planned about: every IK sample stays reachable
+#: (the standing gamma of 90° is too close to its 95° limit to lift and sway).
+WALKING_ANGLES = np.radians([0.0, -20.0, 80.0])
+
+
+@dataclass(frozen=True)
+class WalkSettings:
+    """Gait settings: speed [m/s], heading [rad], duty factor, period [s], step height
+    [m], planned minimum static margin [m], distance to walk [m]."""
+
+    speed: float = 0.03
+    heading: float = 0.0
+    duty_factor: float = 0.8
+    period: float = 4.0
+    step_height: float = 0.04
+    minimum_margin: float = 0.04
+    distance: float = 1.0
+
+    def duration(self) -> float:
+        """Walking time [s] for the distance, in whole gait cycles."""
+        cycles = max(1, math.ceil(self.distance / (self.speed * self.period)))
+        return cycles * self.period
+
+
+def walking_phases(
+    simulation: RobotSimulation, settings: WalkSettings
+) -> tuple[list[Phase], WalkPlan]:
+    """Stand up, go to the walking pose, walk; returns the phases and the gait plan."""
+    robot = simulation.robot
+    phases = stand_up_phases(simulation, hold=1.0, posture=False)
+    standing = np.asarray(phases[-1].references, dtype=float)
+    gait = robot_gait(
+        robot,
+        speed=settings.speed,
+        heading=settings.heading,
+        duty_factor=settings.duty_factor,
+        period=settings.period,
+        step_height=settings.step_height,
+        angles=WALKING_ANGLES,
+        minimum_margin=settings.minimum_margin,
+    )
+    duration = settings.duration()
+    plan = plan_walk(robot, gait, duration)
+    closed = np.ones(robot.joint_count, dtype=bool)
+    ramp_start = sum(phase.duration for phase in phases)
+    first = plan.references[0]
+
+    def to_walking_pose(times: np.ndarray) -> np.ndarray:
+        fraction = np.clip((times - ramp_start) / 1.5, 0.0, 1.0)[:, None]
+        smooth = fraction * fraction * (3.0 - 2.0 * fraction)
+        return standing + smooth * (first - standing)
+
+    walk_start = ramp_start + 2.0
+    step = simulation.control_step
+
+    def walk(times: np.ndarray) -> np.ndarray:
+        index = np.clip(np.round((times - walk_start) / step).astype(int), 0,
+                        len(plan.references) - 1)
+        return plan.references[index]
+
+    phases += [
+        Phase("to walking pose", 2.0, to_walking_pose, closed),
+        Phase("walk", duration, walk, closed),
+        Phase("stop", 1.0, plan.references[-1], closed),
+    ]
+    return phases, plan
+
+
+def walking_outcome(
+    recording: dict[str, np.ndarray], summary: dict[str, Any], settings: WalkSettings,
+    robot: RobotModel,
+) -> dict[str, Any]:
+    """Success or failure of a walking run, with the reason.
+
+    Criteria: **fall** — thorax below 0.15 m or |roll|, |pitch| above 30° during the walk;
+    **margin violation** — the recorded static margin below 0 for more than 5 % of the walk
+    (feet carrying load, whole-robot centre of mass); **slip** — loaded feet sliding more
+    than 10 cm on the ground per metre travelled (a leg's total); **joint limit** — a joint
+    within 0.5° of a limit for more than 20 % of the walk; the run succeeds when none of
+    these happened and the thorax travelled at least 90 % of the distance along the
+    heading (else **too slow**).
+    """
+    times = recording["time [s]"]
+    start = summary["phases"]["walk"]["start [s]"]
+    walking = (times >= start) & (times <= start + summary["phases"]["walk"]["duration [s]"])
+    direction = np.array([math.cos(settings.heading), math.sin(settings.heading)])
+    x, y = recording["thorax x [m]"], recording["thorax y [m]"]
+    first, last = np.flatnonzero(walking)[[0, -1]]
+    displacement = np.array([x[last] - x[first], y[last] - y[first]])
+    travelled = float(direction @ displacement)
+    sideways = float(abs(direction[0] * displacement[1] - direction[1] * displacement[0]))
+    fallen = bool(
+        np.any(recording["thorax z [m]"][walking] < 0.15)
+        or np.any(np.abs(recording["thorax roll [rad]"][walking]) > math.radians(30.0))
+        or np.any(np.abs(recording["thorax pitch [rad]"][walking]) > math.radians(30.0))
+    )
+    margin = recording["stability margin [m]"][walking]
+    violated = float(np.mean(~(margin >= 0.0)))
+    slip = 0.0
+    for leg in robot.legs:
+        loaded = recording[f"{leg} foot normal force [N]"][walking] > 1.0
+        foot = np.column_stack([recording[f"{leg} foot x [m]"][walking],
+                                recording[f"{leg} foot y [m]"][walking]])
+        moved = np.linalg.norm(np.diff(foot, axis=0), axis=1)
+        slip = max(slip, float(np.sum(moved[loaded[1:] & loaded[:-1]])))
+    reasons = []
+    if fallen:
+        reasons.append("fall")
+    if violated > 0.05:
+        reasons.append("margin violation")
+    if slip > 0.1 * max(travelled, 0.1):
+        reasons.append("slip")
+    at_limit = []
+    for name, lower, upper in zip(robot.joint_names, robot.lower_limits(),
+                                  robot.upper_limits(), strict=True):
+        angle = recording[f"{name} angle [rad]"][walking]
+        near = (angle < lower + math.radians(0.5)) | (angle > upper - math.radians(0.5))
+        if np.mean(near) > 0.2:
+            at_limit.append(name)
+    if at_limit:
+        reasons.append("joint limit")
+    air = summary["phases"]["walk"]["air consumed [NL]"]
+    outcome = {
+        "distance travelled [m]": travelled,
+        "sideways drift [m]": sideways,
+        "target distance [m]": settings.distance,
+        "fell": fallen,
+        "time with negative static margin [%]": 100.0 * violated,
+        "smallest static margin [m]": float(np.nanmin(margin)) if margin.size else math.nan,
+        "largest stance-foot slide [m]": slip,
+        "joints at a limit": at_limit,
+        "air per metre [NL/m]": air / travelled if travelled > 0 else math.nan,
+    }
+    if travelled < 0.9 * settings.distance and not reasons:
+        reasons.append("too slow")
+    outcome["success"] = not reasons
+    outcome["reasons"] = reasons or ["reached the distance"]
+    return outcome

@@ -1,0 +1,36 @@
+"""The crawl gait on the simulated quadruped: it moves forward without falling, and the
+outcome is judged by stated criteria."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from pneumaquad.params import load_robot
+from pneumaquad.robot.builder import build_robot
+from pneumaquad.robot.experiment import run_phases
+from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.walking import WalkSettings, walking_outcome, walking_phases
+
+
+def test_one_gait_cycle_moves_the_robot_forward_without_a_fall(tmp_path: Path) -> None:
+    sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    settings = WalkSettings(speed=0.03, period=4.0, distance=0.1)
+    phases, plan = walking_phases(sim, settings)
+    assert plan.margins.min() >= 0.04 - 1e-9  # the plan keeps the requested margin
+    run = run_phases(sim, phases, tmp_path, "walk")
+    outcome = walking_outcome(run.recording, run.summary, settings, sim.robot)
+    assert not outcome["fell"]
+    assert outcome["distance travelled [m]"] > 0.05  # measured 0.1-0.2 m for 0.1 m planned
+    assert outcome["sideways drift [m]"] < 0.1
+    assert set(outcome["reasons"]) <= {"reached the distance", "margin violation", "slip",
+                                       "joint limit", "too slow"}
+    margin = run.recording["stability margin [m]"]
+    times = run.recording["time [s]"]
+    phases = run.summary["phases"]
+    holding = (times > phases["hold"]["start [s]"] + 0.3) & (
+        times < phases["to walking pose"]["start [s]"]
+    )
+    # standing on four feet before the walk: the centre of mass well inside the support
+    assert np.all(margin[holding] > 0.15)
