@@ -171,16 +171,16 @@ class RunRecorder:
             file.close()
 
 
-def _jsonable(value: Any) -> Any:
+def jsonable(value: Any) -> Any:
     """Convert numpy types, paths and non-finite floats to JSON-friendly values."""
     if isinstance(value, Mapping):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
+        return jsonable(value.tolist())
     if isinstance(value, (list, tuple, set, frozenset)):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     if isinstance(value, np.generic):
-        return _jsonable(value.item())
+        return jsonable(value.item())
     if isinstance(value, float):
         return value if math.isfinite(value) else None
     if isinstance(value, Path):
@@ -202,7 +202,7 @@ def write_summary(folder: Path, summary: Mapping[str, Any]) -> Path:
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / SUMMARY_NAME
-    text = json.dumps(_jsonable(summary), indent=2, allow_nan=False)
+    text = json.dumps(jsonable(summary), indent=2, allow_nan=False)
     path.write_text(text + "\n")
     return path
 

@@ -10,7 +10,6 @@ plus the caller's figures), ``rtt.png`` and ``timeline.png``.
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -19,24 +18,11 @@ import numpy as np
 
 from pneumaquad.network.packet_log import PacketLog
 from pneumaquad.network.timing import timing_summary
-from pneumaquad.recording import RunRecorder
+from pneumaquad.recording import RunRecorder, jsonable
 
-__all__ = ["NetworkRecording", "jsonable", "write_network_files", "write_run_description"]
+__all__ = ["NetworkRecording", "write_network_files", "write_run_description"]
 
 _BLOCK_ROWS = 200
-
-
-def jsonable(value: Any) -> Any:
-    """Plain JSON values: numpy to Python, NaN / inf to ``None``."""
-    if isinstance(value, Mapping):
-        return {str(key): jsonable(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [jsonable(item) for item in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 class NetworkRecording:

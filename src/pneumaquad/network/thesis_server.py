@@ -29,9 +29,10 @@ import numpy as np
 
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.endpoint import DEFAULT_HOST, Address
-from pneumaquad.network.run_output import NetworkRecording, jsonable, write_run_description
+from pneumaquad.network.run_output import NetworkRecording, write_run_description
 from pneumaquad.network.thesis import THESIS_SIZE, decode_thesis_command, encode_thesis_state
 from pneumaquad.network.wire import ProtocolError
+from pneumaquad.recording import jsonable
 
 __all__ = ["ThesisServer"]
 

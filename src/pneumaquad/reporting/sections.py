@@ -8,13 +8,13 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from pneumaquad.analysis.compare import comparison_rows, comparison_to_markdown
 from pneumaquad.params import RigSetup, RobotParameters
 from pneumaquad.plotting import plot_rig_run
+from pneumaquad.recording import jsonable
 from pneumaquad.robot.plots import plot_body, plot_joints
 
 from .comparison import (
@@ -253,21 +253,8 @@ def add_comparison(
         "source": source,
     }
     (folder / "comparison.json").write_text(
-        json.dumps(_jsonable(document), indent=2, allow_nan=False) + "\n", encoding="utf-8"
+        json.dumps(jsonable(document), indent=2, allow_nan=False) + "\n", encoding="utf-8"
     )
-
-
-def _jsonable(value: Any) -> Any:
-    """Plain JSON values: NaN/inf become null, numpy scalars plain numbers."""
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 def add_network_timing(page: HtmlPage, run: RunFolder) -> None:
