@@ -228,8 +228,12 @@ def standing_height(simulation: RobotSimulation, angles: np.ndarray) -> float:
 
 
 def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: float = 3.0,
-                    posture: bool = True) -> list[Phase]:
+                    posture: bool = True,
+                    standing_angles: np.ndarray = STANDING_ANGLES) -> list[Phase]:
     """The quadruped stands up from lying on the ground, holds, then follows body commands.
+
+    ``standing_angles`` [rad] (alpha, beta, gamma, the same for every leg) is the pose it
+    stands up into.
 
     Body commands (thorax height ±3 cm, roll ±5°, pitch ±5°, 2 s each) keep the feet where
     they stand and move the body: each leg's foot target in the thorax frame comes from
@@ -239,7 +243,7 @@ def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: f
     count = robot.joint_count
     legs = robot.legs
     lying = np.tile(LYING_ANGLES, len(legs))
-    standing = np.tile(STANDING_ANGLES, len(legs))
+    standing = np.tile(standing_angles, len(legs))
     placement = robot.parameters.placement
     rotation = euler_zyx_matrix(placement.rotation_zyx)
     height = resting_height(simulation, lying)
@@ -263,10 +267,10 @@ def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: f
     ]
     if not posture:
         return phases
-    height = standing_height(simulation, STANDING_ANGLES)
+    height = standing_height(simulation, standing_angles)
     tables = [leg_dh_table(robot, leg) for leg in legs]
     feet_world = [
-        np.array([0.0, 0.0, height]) + rotation @ thorax_frame_points(t, STANDING_ANGLES)
+        np.array([0.0, 0.0, height]) + rotation @ thorax_frame_points(t, standing_angles)
         for t in tables
     ]
     commands = [  # (height change [m], roll [rad], pitch [rad])
