@@ -6,6 +6,12 @@ The console is a thin layer: the physics, control and kinematics live in
 into the 3-D scene (:mod:`.scene`) and the GUI (:mod:`.gui`), and the GUI handlers call
 the public methods of :class:`ConsoleApp` (start, pause, reset, step, rebuild, supply
 pressure, gain scales, teleoperation).
+
+Replay mode (:meth:`ConsoleApp.open_run`): a run folder's model and trajectory are drawn
+instead of the live robot (:mod:`.replay`), the live simulation is paused and kept; a time
+slider or playback picks the sample; :meth:`ConsoleApp.back_to_live` returns. In both
+modes the support polygon and the centre-of-mass projection are drawn
+(:class:`.scene.StabilityOverlay`) and the static stability margin is shown.
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 import viser
@@ -25,7 +32,8 @@ from pneumaquad.robot.scenarios import STANDING_ANGLES, standing_height
 from pneumaquad.robot.simulation import RobotSimulation
 
 from .gui import ConsoleControls
-from .scene import RobotScene
+from .replay import ReplayError, ReplayRun, Stability, static_stability
+from .scene import RobotScene, StabilityOverlay
 from .teleop import FootTeleoperation
 
 __all__ = ["ConsoleApp", "initial_pose"]
@@ -89,6 +97,12 @@ class ConsoleApp:
         self.server.initial_camera.look_at = (0.0, 0.0, 0.25)
         self.scene: RobotScene | None = None
         self.teleop: FootTeleoperation | None = None
+        self.replay: ReplayRun | None = None
+        self.replay_scene: RobotScene | None = None
+        self.replay_time = 0.0
+        self.replay_playing = False
+        self.stability = Stability()
+        self.overlay = StabilityOverlay(self.server)
         self._build(configuration, environment)
         self.controls = ConsoleControls(self)
         self.refresh()
@@ -120,6 +134,7 @@ class ConsoleApp:
         """Build a new model (configuration/environment), keeping supply and gain settings."""
         with self.lock:
             self.running = False
+            self._leave_replay()
             supply = self.supply_gauge_pressure()
             scales = {t: self.gain_scale_of(t) for t in ("alpha", "beta", "gamma")}
             self._build(configuration, environment)
@@ -141,7 +156,9 @@ class ConsoleApp:
         return str(self.server.get_host())
 
     def start(self) -> None:
-        """Run the simulation continuously."""
+        """Run the simulation continuously (leaving replay mode)."""
+        if self.replay is not None:
+            self.back_to_live()
         self.running = True
         self.message = ""
         self._wake.set()
@@ -152,13 +169,16 @@ class ConsoleApp:
         self.refresh()
 
     def step_once(self) -> None:
-        """Advance one chunk (paused or not)."""
+        """Advance one chunk (paused or not; leaves replay mode)."""
+        if self.replay is not None:
+            self.back_to_live()
         self.advance()
 
     def reset(self) -> None:
         """Back to the reset pose, time 0, air counter 0; styluses back home."""
         with self.lock:
             self.running = False
+            self._leave_replay()
             self.home_angles = initial_pose(self.simulation)
             self.teleop.reset()
             self.controls.clear_history()
@@ -176,17 +196,99 @@ class ConsoleApp:
             self.refresh()
 
     def refresh(self) -> None:
-        """Copy the simulation state into the scene and the GUI."""
+        """Copy the simulation (or the replayed sample) state into the scene and the GUI."""
         with self.lock:
+            if self.replay is not None:
+                self._show_replay()
+                return
             data = self.simulation.data
             self.scene.update(data)
             thorax = self.simulation.robot.thorax_id
             self.teleop.follow_thorax(data.xpos[thorax].copy(), data.xquat[thorax].copy())
+            self.stability = static_stability(self.simulation)
+            self.overlay.update(self.stability)
             self.controls.update()
+
+    # --- replay ----------------------------------------------------------------------
+    @property
+    def replaying(self) -> bool:
+        """True in replay mode."""
+        return self.replay is not None
+
+    def open_run(self, folder: str | Path) -> bool:
+        """Replay the run folder ``folder``; False (and a message) when it cannot be read.
+
+        The live simulation is paused and hidden (its state is kept); the replayed robot
+        is drawn from the folder's ``model.xml`` at its first trajectory sample.
+        """
+        with self.lock:
+            try:
+                replay = ReplayRun(folder)
+            except ReplayError as error:
+                self.message = str(error)
+                self.controls.show_error(self.message)
+                self.refresh()
+                return False
+            self.running = False
+            self._leave_replay()
+            self.message = ""
+            self.replay = replay
+            self.replay_scene = RobotScene(self.server, replay, root="/replay")
+            self.scene.set_visible(False)
+            self.teleop.thorax_frame.visible = False
+            self.replay_time = float(replay.times[0])
+            self.controls.enter_replay(replay)
+            self.refresh()
+            return True
+
+    def set_replay_time(self, time_s: float) -> None:
+        """Show the replayed sample nearest ``time_s`` [s] (no-op outside replay mode)."""
+        with self.lock:
+            if self.replay is None:
+                return
+            self.replay_time = float(np.clip(time_s, self.replay.times[0], self.replay.duration))
+            self._show_replay()
+
+    def play_replay(self, playing: bool = True) -> None:
+        """Play the replay at real speed from the slider's time (or pause it)."""
+        self.replay_playing = bool(playing) and self.replay is not None
+        if self.replay_playing and self.replay_time >= self.replay.duration:
+            self.set_replay_time(float(self.replay.times[0]))
+        self._wake.set()
+
+    def back_to_live(self) -> None:
+        """Leave replay mode: the live robot (paused, as it was) is shown again."""
+        with self.lock:
+            self._leave_replay()
+            self.refresh()
+
+    def _leave_replay(self) -> None:
+        self.replay_playing = False
+        if self.replay is None:
+            return
+        self.replay = None
+        if self.replay_scene is not None:
+            self.replay_scene.remove()
+            self.replay_scene = None
+        self.scene.set_visible(True)
+        self.teleop.thorax_frame.visible = True
+        self.controls.leave_replay()
+
+    def _show_replay(self) -> None:
+        replay = self.replay
+        index = replay.show(self.replay_time)
+        row = replay.row_at(self.replay_time)
+        self.replay_scene.update(replay.data)
+        self.stability = replay.stability(row)
+        self.overlay.update(self.stability)
+        self.controls.update_replay(replay, index, row)
 
     def _loop(self) -> None:
         wall_start, sim_start = time.perf_counter(), self.simulation.time
         while not self._stop.is_set():
+            if self.replay_playing:
+                self._play_step()
+                continue
             if not self.running:
                 self._wake.wait(0.05)
                 self._wake.clear()
@@ -199,6 +301,18 @@ class ConsoleApp:
                     time.sleep(ahead)
                 elif ahead < -0.5:  # fell behind: do not try to catch up
                     wall_start, sim_start = time.perf_counter(), self.simulation.time
+
+    def _play_step(self, period: float = 0.05) -> None:
+        started = time.perf_counter()
+        time.sleep(period)
+        with self.lock:
+            if self.replay is None or not self.replay_playing:
+                return
+            self.set_replay_time(self.replay_time + time.perf_counter() - started)
+            if self.replay_time >= self.replay.duration:
+                self.replay_playing = False
+                self.controls.update_replay(self.replay, self.replay.index_at(self.replay_time),
+                                            self.replay.row_at(self.replay_time))
 
     def close(self) -> None:
         """Stop the simulation thread and the server."""

@@ -6,6 +6,7 @@ Register with ``app.command("console")(console_command)`` in :mod:`pneumaquad.cl
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -19,7 +20,7 @@ __all__ = ["console_command", "serve_console"]
 def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped",
                   environment: str = "flat", host: str = "127.0.0.1", port: int = 8080,
                   duration: float | None = None, overrides: list[str] | None = None,
-                  start: bool = False) -> None:
+                  start: bool = False, replay: Path | None = None) -> None:
     """Run the console until Ctrl-C (or for ``duration`` wall seconds), then stop cleanly.
 
     Parameters
@@ -30,6 +31,8 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
         Wall-clock seconds to serve before stopping (tests, demos); forever by default.
     start : bool
         Start the simulation immediately instead of paused.
+    replay : Path, optional
+        A run folder to open in replay mode at once (see :meth:`ConsoleApp.open_run`).
     """
     from .app import ConsoleApp
 
@@ -40,7 +43,12 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
     if app.host not in ("127.0.0.1", "::1", "localhost"):
         console.print(f"[yellow]warning:[/] bound to {app.host}: anyone who can reach this "
                       "port can drive the simulation (no authentication)")
-    if start:
+    if replay is not None:
+        if app.open_run(replay):
+            console.print(f"Replaying {replay}")
+        else:
+            console.print(f"[yellow]warning:[/] {app.message}")
+    elif start:
         app.start()
     deadline = None if duration is None else time.monotonic() + duration
     try:
@@ -73,6 +81,10 @@ def console_command(
     ] = None,
     start: Annotated[bool, typer.Option("--start/--paused", help="Run at once.")] = False,
     overrides: SetOption = None,
+    replay: Annotated[
+        Path | None, typer.Option("--replay", help="Open this run folder in replay mode.")
+    ] = None,
 ) -> None:
     """Operator console in the browser: live 3-D robot, run controls, teleoperation."""
-    serve_console(params, configuration, environment, host, port, duration, overrides, start)
+    serve_console(params, configuration, environment, host, port, duration, overrides, start,
+                  replay)

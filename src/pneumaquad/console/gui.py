@@ -19,6 +19,7 @@ from pneumaquad.robot.environment import ENVIRONMENTS
 
 if TYPE_CHECKING:
     from .app import ConsoleApp
+    from .replay import ReplayRun
 
 __all__ = ["PLOTTED_LEG", "ConsoleControls"]
 
@@ -51,6 +52,7 @@ class ConsoleControls:
         self.app = app
         gui = app.server.gui
         self.history: deque[np.ndarray] = deque()
+        self._syncing = False
         self._last_plot = 0.0
         with gui.add_folder("Simulation"):
             self.start_button = gui.add_button("Start", icon=viser.Icon.PLAYER_PLAY)
@@ -59,6 +61,21 @@ class ConsoleControls:
             self.reset_button = gui.add_button("Reset", icon=viser.Icon.REFRESH)
             self.real_time = gui.add_checkbox("Real time", app.real_time)
             self.status = gui.add_markdown("")
+        with gui.add_folder("Replay"):
+            self.run_folder = gui.add_text("Run folder", "")
+            self.open_button = gui.add_button("Open run", icon=viser.Icon.FOLDER_OPEN)
+            self.replay_slider = gui.add_slider("Replay time [s]", 0.0, 1.0, 0.01, 0.0,
+                                                disabled=True)
+            self.play_button = gui.add_button("Play", icon=viser.Icon.PLAYER_PLAY,
+                                              disabled=True)
+            self.replay_pause_button = gui.add_button("Pause replay",
+                                                      icon=viser.Icon.PLAYER_PAUSE,
+                                                      disabled=True)
+            self.live_button = gui.add_button("Back to live", icon=viser.Icon.ARROW_BACK,
+                                              disabled=True)
+            self.replay_status = gui.add_markdown("")
+        with gui.add_folder("Stability"):
+            self.stability = gui.add_markdown("")
         with gui.add_folder("Model"):
             self.configuration = gui.add_dropdown("Configuration", CONFIGURATIONS,
                                                   initial_value=app.configuration)
@@ -101,6 +118,11 @@ class ConsoleControls:
         self.pause_button.on_click(lambda _event: app.pause())
         self.step_button.on_click(lambda _event: app.step_once())
         self.reset_button.on_click(lambda _event: app.reset())
+        self.open_button.on_click(lambda _event: app.open_run(self.run_folder.value.strip()))
+        self.replay_slider.on_update(lambda _event: self._slide())
+        self.play_button.on_click(lambda _event: app.play_replay(True))
+        self.replay_pause_button.on_click(lambda _event: app.play_replay(False))
+        self.live_button.on_click(lambda _event: app.back_to_live())
         self.real_time.on_update(lambda _event: setattr(app, "real_time", self.real_time.value))
         self.configuration.on_update(lambda _event: self._rebuild())
         self.environment.on_update(lambda _event: self._rebuild())
@@ -118,6 +140,100 @@ class ConsoleControls:
             self.app.configuration, self.app.environment
         ):
             self.app.rebuild(self.configuration.value, self.environment.value)
+
+    def _slide(self) -> None:
+        if not self._syncing:
+            self.app.set_replay_time(float(self.replay_slider.value))
+
+    # --- replay ----------------------------------------------------------------------
+    def show_error(self, message: str) -> None:
+        """Show ``message`` under the replay controls (e.g. a folder that is no run)."""
+        self.replay_status.content = f"⚠ {message}"
+
+    def enter_replay(self, replay: ReplayRun) -> None:
+        """Set the slider to the run's time range and enable the replay buttons."""
+        times = replay.times
+        step = float(np.median(np.diff(times))) if len(times) > 1 else 0.01
+        self._syncing = True
+        try:
+            self.replay_slider.max = max(float(times[-1]), float(times[0]) + step)
+            self.replay_slider.min = float(times[0])
+            self.replay_slider.step = step
+            self.replay_slider.value = float(times[0])
+        finally:
+            self._syncing = False
+        for handle in (self.replay_slider, self.play_button, self.replay_pause_button,
+                       self.live_button):
+            handle.disabled = False
+        self.run_folder.value = str(replay.folder)
+        self.clear_history()
+
+    def leave_replay(self) -> None:
+        """Disable the replay controls (back to live)."""
+        for handle in (self.replay_slider, self.play_button, self.replay_pause_button,
+                       self.live_button):
+            handle.disabled = True
+        self.replay_status.content = ""
+        self.clear_history()
+
+    def update_replay(self, replay: ReplayRun, index: int, row: int | None) -> None:
+        """Readouts, gauge and plots of the replayed sample ``index``, recording ``row``."""
+        app = self.app
+        time_s = float(replay.times[index])
+        if abs(float(self.replay_slider.value) - app.replay_time) > 1e-9:
+            self._syncing = True
+            try:
+                self.replay_slider.value = app.replay_time
+            finally:
+                self._syncing = False
+        state = "playing" if app.replay_playing else "paused"
+        self.status.content = (f"**replay** ({state}) of `{replay.folder.name}`: "
+                               f"t = {time_s:.2f} s, sample {index} of {len(replay.times) - 1}")
+        self.replay_status.content = f"Replaying `{replay.folder}`, {replay.duration:.2f} s"
+        self.teleop_status.content = "(replay: teleoperation off)"
+        self._show_stability()
+        if row is None:
+            self.readout.content = "No recording (recording.parquet) in this run folder."
+            return
+        supply = replay.value("supply pressure [Pa]", row)
+        initial = replay.value("supply pressure [Pa]", 0)
+        if np.isfinite(supply) and initial > 0:
+            self.supply_gauge.value = float(np.clip(100.0 * supply / initial, 0.0, 100.0))
+        air = replay.value("air consumed [kg]", row)
+        normal_litres = replay.value("air consumed [NL]", row)
+        forces = [replay.value(f"{leg} foot normal force [N]", row) for leg in replay.legs]
+        self.readout.content = (
+            f"Supply {supply / 1000.0:.0f} kPa abs (recorded; gauge: share of the first "
+            f"sample)  \n"
+            f"Air consumed {1000.0 * air:.3f} g = {normal_litres:.2f} NL  \n"
+            f"Foot forces [N]: {', '.join(f'{f:.0f}' for f in forces)}  \n"
+            f"Contacts: {app.replay_scene.contact_count}"
+        )
+        record = replay.recording
+        names = [f"{PLOTTED_LEG}_{joint_type}" for joint_type in _JOINT_COLOURS]
+        columns = [f"{n} {kind}" for n in names for kind in ("reference [rad]", "angle [rad]")]
+        pressures = [f"{n} {kind}" for n in names
+                     for kind in ("cap pressure [Pa]", "rod pressure [Pa]")]
+        if not all(c in record for c in columns + pressures):
+            return
+        times = replay.record_times
+        window = slice(int(np.searchsorted(times, times[row] - PLOT_WINDOW)), row + 1)
+        self.angle_plot.data = (times[window], *(np.degrees(record[c][window]) for c in columns))
+        self.pressure_plot.data = (times[window],
+                                   *(record[c][window] / 1000.0 for c in pressures))
+
+    def _show_stability(self) -> None:
+        stability = self.app.stability
+        margin = stability.margin
+        feet = len(stability.polygon)
+        source = "recorded" if self.app.replaying else "live"
+        if np.isfinite(margin):
+            verdict = "stable" if margin >= 0.0 else "**outside the support polygon**"
+            text = f"Stability margin {1000.0 * margin:.0f} mm ({verdict}; {source})"
+        else:
+            text = f"Stability margin: n/a ({source})"
+        self.stability.content = (f"{text}  \nSupport polygon: {feet} vertices; centre of "
+                                  f"mass at ({stability.com[0]:.3f}, {stability.com[1]:.3f}) m")
 
     def clear_history(self) -> None:
         """Forget the plotted samples (after a reset or a rebuild)."""
@@ -154,6 +270,7 @@ class ConsoleControls:
             f"Contacts: {app.scene.contact_count}"
         )
         self.teleop_status.content = app.teleop.status()
+        self._show_stability()
         joints = self._joints()
         if joints is None:
             return

@@ -10,13 +10,19 @@ current :class:`mujoco.MjData` into the scene; the console calls it after every 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import mujoco
 import numpy as np
 import viser
 
 from pneumaquad.robot.builder import RobotModel
 
-__all__ = ["RobotScene", "capsule_mesh", "cylinder_mesh", "geom_node_name"]
+if TYPE_CHECKING:
+    from .replay import ReplayRun, Stability
+
+__all__ = ["RobotScene", "StabilityOverlay", "capsule_mesh", "cylinder_mesh",
+           "geom_node_name"]
 
 #: Length of a contact-force arrow per newton [m/N].
 FORCE_ARROW_SCALE = 0.004
@@ -24,6 +30,12 @@ _CYLINDER_COLOUR = (190, 190, 200)
 _CONTACT_COLOUR = (255, 60, 40)
 _FORCE_COLOUR = (255, 170, 0)
 _GROUND_SIZE = 6.0
+_POLYGON_COLOUR = (40, 120, 255)
+_COM_STABLE_COLOUR = (40, 200, 80)
+_COM_UNSTABLE_COLOUR = (230, 30, 30)
+_COM_UNKNOWN_COLOUR = (150, 150, 150)
+#: Height of the support polygon and COM marker above the stance feet' mean height [m].
+_OVERLAY_LIFT = 0.002
 
 
 def _lathe(profile_radius: np.ndarray, profile_height: np.ndarray,
@@ -66,11 +78,14 @@ def cylinder_mesh(radius: float, half_length: float,
     return _lathe(profile_radius, profile_height, segments)
 
 
-def geom_node_name(model: mujoco.MjModel, geom: int) -> str:
-    """Scene node name of ``geom``: ``/world/<name>`` (static) or ``/robot/geoms/<name>``."""
+def geom_node_name(model: mujoco.MjModel, geom: int, root: str = "") -> str:
+    """Scene node name of ``geom``: ``/world/<name>`` (static) or ``/robot/geoms/<name>``.
+
+    ``root`` is prepended (``"/replay"`` for the replayed robot).
+    """
     name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, geom) or f"geom{geom}"
     prefix = "/world" if model.geom_bodyid[geom] == 0 else "/robot/geoms"
-    return f"{prefix}/{name}"
+    return f"{root}{prefix}/{name}"
 
 
 def _geom_colour(model: mujoco.MjModel, geom: int) -> tuple[int, int, int]:
@@ -91,13 +106,19 @@ class RobotScene:
     Parameters
     ----------
     server : viser.ViserServer
-    robot : RobotModel
-        The compiled robot; its geoms and tendon sites are drawn.
+    robot : RobotModel or ReplayRun
+        The compiled robot (anything with ``model``, ``joint_names``); its geoms and
+        tendon sites are drawn.
+    root : str
+        Prefix of every node name (``"/replay"`` for a replayed run, so that it does not
+        replace the live robot's nodes).
     """
 
-    def __init__(self, server: viser.ViserServer, robot: RobotModel) -> None:
+    def __init__(self, server: viser.ViserServer, robot: RobotModel | ReplayRun,
+                 root: str = "") -> None:
         self.server = server
         self.robot = robot
+        self.root = root
         model = robot.model
         self.geom_nodes: dict[int, viser.SceneNodeHandle] = {}
         self.dynamic_geoms: list[int] = []
@@ -112,24 +133,26 @@ class RobotScene:
             [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, f"{joint}_{end}")
              for end in ("barrel_pivot", "rod_pin")]
             for joint in robot.joint_names
-        ])
+        ]).reshape(-1, 2)
+        self.cylinder_sites = self.cylinder_sites[np.all(self.cylinder_sites >= 0, axis=1)]
         self.cylinders = server.scene.add_line_segments(
-            "/robot/cylinders", np.zeros((robot.joint_count, 2, 3)), _CYLINDER_COLOUR,
+            f"{root}/robot/cylinders", np.zeros((len(self.cylinder_sites), 2, 3)),
+            _CYLINDER_COLOUR,
             thickness=0.012,
         )
         self.contact_points = server.scene.add_point_cloud(
-            "/contacts/points", np.zeros((1, 3)), np.array([_CONTACT_COLOUR]),
+            f"{root}/contacts/points", np.zeros((1, 3)), np.array([_CONTACT_COLOUR]),
             point_size=0.02, point_shape="circle", visible=False,
         )
         self.contact_forces = server.scene.add_line_segments(
-            "/contacts/forces", np.zeros((1, 2, 3)), _FORCE_COLOUR, thickness=0.006,
+            f"{root}/contacts/forces", np.zeros((1, 2, 3)), _FORCE_COLOUR, thickness=0.006,
             visible=False,
         )
         self.contact_count = 0
 
     def _add_geom(self, geom: int) -> viser.SceneNodeHandle | None:
         model, scene = self.robot.model, self.server.scene
-        name = geom_node_name(model, geom)
+        name = geom_node_name(model, geom, self.root)
         size = model.geom_size[geom]
         colour = _geom_colour(model, geom)
         kind = model.geom_type[geom]
@@ -201,6 +224,16 @@ class RobotScene:
             arrows[index, 1] = contact.pos + FORCE_ARROW_SCALE * force
         return points, arrows
 
+    def set_visible(self, visible: bool) -> None:
+        """Show or hide the whole robot and its environment (contacts: hidden only)."""
+        with self.server.atomic():
+            for node in self.geom_nodes.values():
+                node.visible = visible
+            self.cylinders.visible = visible
+            if not visible:
+                self.contact_points.visible = False
+                self.contact_forces.visible = False
+
     def remove(self) -> None:
         """Remove every node of this robot from the scene (before a rebuild)."""
         for node in self.geom_nodes.values():
@@ -209,3 +242,55 @@ class RobotScene:
             node.remove()
         self.geom_nodes.clear()
         self.dynamic_geoms.clear()
+
+
+class StabilityOverlay:
+    """Support polygon (blue line segments) and centre-of-mass projection (sphere).
+
+    The marker is green inside the polygon, red when the stability margin is negative,
+    grey when it is unknown (no foot in contact); both are drawn just above the mean
+    height of the stance feet.
+    """
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        self.server = server
+        self.polygon = server.scene.add_line_segments(
+            "/stability/support_polygon", np.zeros((1, 2, 3)), _POLYGON_COLOUR,
+            thickness=0.008, visible=False,
+        )
+        self.com = server.scene.add_icosphere(
+            "/stability/centre_of_mass", radius=0.015, color=_COM_UNKNOWN_COLOUR,
+            subdivisions=2, visible=False,
+        )
+
+    def update(self, stability: Stability) -> None:
+        """Draw ``stability`` (see :class:`.replay.Stability`)."""
+        height = stability.height + _OVERLAY_LIFT
+        vertices = np.asarray(stability.polygon, dtype=float)
+        with self.server.atomic():
+            if len(vertices) >= 2:
+                ends = np.roll(vertices, -1, axis=0) if len(vertices) > 2 else vertices[::-1]
+                count = len(vertices) if len(vertices) > 2 else 1
+                segments = np.empty((count, 2, 3))
+                segments[:, 0, :2] = vertices[:count]
+                segments[:, 1, :2] = ends[:count]
+                segments[:, :, 2] = height
+                self.polygon.points = segments.astype(np.float32)
+                self.polygon.colors = np.tile(np.array(_POLYGON_COLOUR, dtype=np.uint8),
+                                              (count, 2, 1))
+                self.polygon.visible = True
+            else:
+                self.polygon.visible = False
+            if np.all(np.isfinite(stability.com)):
+                self.com.position = (float(stability.com[0]), float(stability.com[1]), height)
+                self.com.color = self.colour(stability.margin)
+                self.com.visible = True
+            else:
+                self.com.visible = False
+
+    @staticmethod
+    def colour(margin: float) -> tuple[int, int, int]:
+        """Marker colour for ``margin`` [m]: green ≥ 0, red < 0, grey unknown."""
+        if not np.isfinite(margin):
+            return _COM_UNKNOWN_COLOUR
+        return _COM_UNSTABLE_COLOUR if margin < 0.0 else _COM_STABLE_COLOUR
