@@ -25,22 +25,13 @@ zero force / torque (seal friction stays, it is physical).
 
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 
 from pneumaquad.layout import P_STROKE
 from pneumaquad.network.state import StateMessage, StatusFlag
 from pneumaquad.robot.builder import RobotModel
-from pneumaquad.robot.coupling import (
-    F_COULOMB,
-    F_EXPONENT,
-    F_STATIC,
-    F_STRIBECK_VELOCITY,
-    F_VISCOUS,
-    L_RETRACTED,
-)
+from pneumaquad.robot.coupling import L_RETRACTED, set_seal_friction
 from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["COMMAND_KINDS", "DynamicsSide", "piston_readout"]
@@ -139,15 +130,10 @@ class DynamicsSide:
         model, data, robot = self.model, self.data, self.robot
         if self.command_kind == "force":
             data.ctrl[robot.actuator_id] = self.command
-            seal = self.simulation.seal
-            speed = np.abs(data.ten_velocity[robot.tendon_id])
-            # Same expression, same operation order as robot_control_step (bit-identical).
-            for i, tendon in enumerate(robot.tendon_id):
-                breakaway = seal[i, F_COULOMB] + (seal[i, F_STATIC] - seal[i, F_COULOMB]) * \
-                    math.exp(-((float(speed[i]) / seal[i, F_STRIBECK_VELOCITY])
-                               ** seal[i, F_EXPONENT]))
-                model.tendon_frictionloss[tendon] = breakaway
-                model.tendon_damping[tendon] = seal[i, F_VISCOUS]
+            # The function robot_control_step uses, so both sides agree bit for bit.
+            for index in range(robot.joint_count):
+                set_seal_friction(self.simulation.seal, robot.tendon_id, data.ten_velocity,
+                                  model.tendon_frictionloss, model.tendon_damping, index)
         else:
             data.ctrl[robot.actuator_id] = 0.0
             data.qfrc_applied[robot.dof_address] = self.command

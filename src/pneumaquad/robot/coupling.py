@@ -24,6 +24,7 @@ from pneumaquad.layout import (
     P_STROKE,
     S_BRISTLE,
 )
+from pneumaquad.physics.friction import stribeck_curve
 from pneumaquad.pneumatics import friction_slope_of
 
 # Per-joint linkage rows: l1, l3, γ0, l2, direction (see pneumaquad.robot.linkage).
@@ -60,6 +61,21 @@ def piston_from_angle(linkage_row, angle: float) -> float:
     l3 = linkage_row[L_PARENT]
     gamma = linkage_row[L_GAMMA_ZERO] + linkage_row[L_DIRECTION] * angle
     return math.sqrt(l1 * l1 + l3 * l3 - 2.0 * l1 * l3 * math.cos(gamma)) - linkage_row[L_RETRACTED]
+
+
+@compiled
+def set_seal_friction(seal, tendon_ids, tendon_velocity, tendon_frictionloss, tendon_damping,
+                      index: int) -> None:
+    """Seal friction of cylinder ``index`` as the tendon's dry friction in MuJoCo: the
+    Stribeck breakaway force at the current piston speed (eq 4.2.6) as ``frictionloss``
+    [N], the viscous coefficient as ``damping`` [N s/m]."""
+    tendon = tendon_ids[index]
+    row = seal[index]
+    tendon_frictionloss[tendon] = stribeck_curve(
+        tendon_velocity[tendon], row[F_STATIC], row[F_COULOMB], row[F_STRIBECK_VELOCITY],
+        row[F_EXPONENT],
+    )
+    tendon_damping[tendon] = row[F_VISCOUS]
 
 
 @compiled
@@ -146,11 +162,8 @@ def robot_control_step(
         force_mean[i] += control_step / (tau + control_step) * (force - force_mean[i])
         v = velocities[i]
         if mujoco_friction:
-            breakaway = seal[i, F_COULOMB] + (seal[i, F_STATIC] - seal[i, F_COULOMB]) * math.exp(
-                -((abs(v) / seal[i, F_STRIBECK_VELOCITY]) ** seal[i, F_EXPONENT])
-            )
-            tendon_frictionloss[tendon] = breakaway
-            tendon_damping[tendon] = seal[i, F_VISCOUS]
+            set_seal_friction(seal, tendon_ids, tendon_velocity, tendon_frictionloss,
+                              tendon_damping, i)
         else:
             slope = max(friction_slope_of(params[i], v, state[i, S_BRISTLE]), 0.0)
             tendon_damping[tendon] = slope
