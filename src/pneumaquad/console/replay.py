@@ -20,14 +20,14 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from pneumaquad.gait.stability import stability_margin, support_polygon
+from pneumaquad.gait.stability import STANCE_FORCE, loaded_support
 from pneumaquad.recording import read_recording
 from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["CONTACT_FORCE", "ReplayError", "ReplayRun", "Stability", "static_stability"]
 
 #: A foot is in stance when its normal contact force exceeds this [N].
-CONTACT_FORCE = 1.0
+CONTACT_FORCE = STANCE_FORCE
 
 
 class ReplayError(ValueError):
@@ -58,14 +58,13 @@ class Stability:
 
 def _stability(feet: np.ndarray, forces: np.ndarray, com: np.ndarray,
                margin: float | None = None) -> Stability:
-    stance = np.asarray(forces) > CONTACT_FORCE
     feet = np.asarray(feet, dtype=float)
     com = np.asarray(com, dtype=float)
-    if not np.any(stance):
-        return Stability(com=com, margin=float("nan") if margin is None else margin)
-    polygon = support_polygon(feet[stance, :2])
-    if margin is None:
-        margin = float(stability_margin(com, polygon)) if np.all(np.isfinite(com)) else np.nan
+    polygon, computed = loaded_support(feet, forces, com)
+    margin = computed if margin is None else margin
+    if not polygon.size:
+        return Stability(com=com, margin=float(margin))
+    stance = np.asarray(forces) > STANCE_FORCE
     height = float(np.mean(feet[stance, 2])) if feet.shape[1] > 2 else 0.0
     return Stability(polygon, com, float(margin), height)
 

@@ -16,7 +16,16 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["centre_of_mass", "stability_margin", "support_polygon"]
+__all__ = [
+    "STANCE_FORCE",
+    "centre_of_mass",
+    "loaded_support",
+    "stability_margin",
+    "support_polygon",
+]
+
+#: A foot carrying more normal force than this [N] counts as in stance.
+STANCE_FORCE = 1.0
 
 Array = NDArray[np.float64]
 _COLLINEAR_TOLERANCE = 1e-12  # [m²] cross products below this: collinear points
@@ -123,3 +132,34 @@ def centre_of_mass(model: mujoco.MjModel, data: mujoco.MjData) -> Array:
     masses = np.asarray(model.body_mass, dtype=float)
     centre = masses @ np.asarray(data.xipos, dtype=float) / masses.sum()
     return centre[:2]
+
+
+def loaded_support(
+    feet: ArrayLike, normal_forces: ArrayLike, com_xy: ArrayLike
+) -> tuple[Array, float]:
+    """Support polygon of the loaded feet and the static margin of the centre of mass.
+
+    Parameters
+    ----------
+    feet : (n, 2 or 3) array [m]
+        Foot positions (world; the first two coordinates are the ground plane).
+    normal_forces : (n,) array [N]
+        Normal contact force on each foot; above :data:`STANCE_FORCE` the foot is in stance.
+    com_xy : (2,) array [m]
+        Ground projection of the centre of mass.
+
+    Returns
+    -------
+    (polygon (m, 2) [m], margin [m])
+        :func:`support_polygon` of the stance feet (m = 0 without any) and
+        :func:`stability_margin` of the centre of mass; NaN without support or with a
+        non-finite centre of mass.
+    """
+    stance = np.asarray(normal_forces) > STANCE_FORCE
+    if not np.any(stance):
+        return np.zeros((0, 2)), float("nan")
+    polygon = support_polygon(np.asarray(feet, dtype=float)[stance, :2])
+    com = np.asarray(com_xy, dtype=float)
+    if not np.all(np.isfinite(com)):
+        return polygon, float("nan")
+    return polygon, float(stability_margin(com, polygon))

@@ -13,7 +13,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from pneumaquad.gait.stability import stability_margin, support_polygon
+from pneumaquad.gait.stability import loaded_support
 from pneumaquad.layout import (
     O_PNEUMATIC_FORCE,
     P_R,
@@ -47,8 +47,6 @@ _THORAX = ("thorax x [m]", "thorax y [m]", "thorax z [m]", "thorax roll [rad]",
            "thorax pitch [rad]", "thorax yaw [rad]")
 _SUPPLY = ("supply pressure [Pa]", "air consumed [kg]", "air consumed [NL]")
 _BALANCE = ("centre of mass x [m]", "centre of mass y [m]", "stability margin [m]")
-#: A foot carrying more than this normal force [N] counts as in stance.
-STANCE_FORCE = 1.0
 
 
 def recording_columns(simulation: RobotSimulation) -> tuple[str, ...]:
@@ -112,11 +110,6 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
     normal_litres = air * s.params[0, P_R] * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
     supply = np.array([s.supply_pressure(), air, normal_litres])
     com = s.data.subtree_com[0, :2]
-    stance = foot_forces > STANCE_FORCE
-    margin = (
-        float(stability_margin(com, support_polygon(foot_positions[stance, :2])))
-        if stance.any()
-        else np.nan
-    )
+    _, margin = loaded_support(foot_positions, foot_forces, com)
     balance = np.array([com[0], com[1], margin])
     return np.concatenate([[s.time], per_joint, thorax, feet, supply, balance])

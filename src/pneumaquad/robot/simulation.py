@@ -18,6 +18,7 @@ import numpy as np
 
 from pneumaquad.actuator import initial_state, pack_parameters, supply_state
 from pneumaquad.control.pid import N_CONTROLLER_STATES, controller_gains
+from pneumaquad.gait.stability import STANCE_FORCE
 from pneumaquad.layout import (
     N_OUTPUTS,
     N_STATES,
@@ -102,7 +103,7 @@ def seal_friction_row(actuator: ActuatorParameters) -> np.ndarray:
 
 
 def stance_swing_schedule(
-    stance_scale: float, swing_scale: float, contact_force: float = 1.0
+    stance_scale: float, swing_scale: float, contact_force: float = STANCE_FORCE
 ) -> GainSchedule:
     """A gain schedule: PID gains × ``stance_scale`` on legs whose foot carries more than
     ``contact_force`` [N], × ``swing_scale`` on the others (evaluated between chunks)."""

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from pneumaquad.gait.stability import STANCE_FORCE
 from pneumaquad.gait.walk import WalkPlan, plan_walk, robot_gait
 
 from .builder import RobotModel
@@ -124,7 +125,7 @@ def walking_outcome(
     violated = float(np.mean(~(margin >= 0.0)))
     slip = 0.0
     for leg in robot.legs:
-        loaded = recording[f"{leg} foot normal force [N]"][walking] > 1.0
+        loaded = recording[f"{leg} foot normal force [N]"][walking] > STANCE_FORCE
         foot = np.column_stack([recording[f"{leg} foot x [m]"][walking],
                                 recording[f"{leg} foot y [m]"][walking]])
         moved = np.linalg.norm(np.diff(foot, axis=0), axis=1)
