@@ -10,13 +10,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import mujoco
 import numpy as np
 
 __all__ = [
     "euler_zyx_matrix",
     "frame_matrix",
     "invert",
-    "rotation_about",
     "rotation_to_quaternion",
 ]
 
@@ -59,35 +59,8 @@ def invert(transform: np.ndarray) -> np.ndarray:
     return inverse
 
 
-def rotation_about(axis: Sequence[float], angle: float) -> np.ndarray:
-    """Rotation matrix of ``angle`` [rad] about the unit ``axis`` (Rodrigues)."""
-    x, y, z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    skew = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + np.sin(angle) * skew + (1.0 - np.cos(angle)) * (skew @ skew)
-
-
 def rotation_to_quaternion(rotation: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (Shepperd's method)."""
-    m = rotation
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    candidates = np.array([trace, m[0, 0], m[1, 1], m[2, 2]])
-    largest = int(np.argmax(candidates))
-    if largest == 0:
-        w = 0.5 * np.sqrt(1.0 + trace)
-        q = [w, (m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w),
-             (m[1, 0] - m[0, 1]) / (4 * w)]
-    elif largest == 1:
-        x = 0.5 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [(m[2, 1] - m[1, 2]) / (4 * x), x, (m[0, 1] + m[1, 0]) / (4 * x),
-             (m[0, 2] + m[2, 0]) / (4 * x)]
-    elif largest == 2:
-        y = 0.5 * np.sqrt(1.0 - m[0, 0] + m[1, 1] - m[2, 2])
-        q = [(m[0, 2] - m[2, 0]) / (4 * y), (m[0, 1] + m[1, 0]) / (4 * y), y,
-             (m[1, 2] + m[2, 1]) / (4 * y)]
-    else:
-        z = 0.5 * np.sqrt(1.0 - m[0, 0] - m[1, 1] + m[2, 2])
-        q = [(m[1, 0] - m[0, 1]) / (4 * z), (m[0, 2] + m[2, 0]) / (4 * z),
-             (m[1, 2] + m[2, 1]) / (4 * z), z]
-    quaternion = np.asarray(q)
-    quaternion /= np.linalg.norm(quaternion)
+    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (MuJoCo's ``mju_mat2Quat``)."""
+    quaternion = np.zeros(4)
+    mujoco.mju_mat2Quat(quaternion, np.ascontiguousarray(rotation, dtype=float).reshape(9))
     return quaternion if quaternion[0] >= 0.0 else -quaternion
