@@ -8,6 +8,12 @@ from __future__ import annotations
 
 import functools
 import math
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -107,3 +113,37 @@ def thesis() -> RigSetup:
 def gamma() -> ActuatorParameters:
     """The shipped crr-gamma actuator (App. C.1.1)."""
     return actuator_setup("crr-gamma")
+
+
+#: The command line, started the way the console script does.
+CLI = [sys.executable, "-c", "from pneumaquad.cli import main; main()"]
+
+
+def interrupt_when_recording(
+    arguments: list[str],
+    csv: Path,
+    min_bytes: int,
+    wait: float,
+    cwd: Path | None = None,
+    between_polls: Callable[[], None] | None = None,
+    poll_interval: float = 0.1,
+) -> tuple[int, str]:
+    """Run ``pneumaquad <arguments>``, send a real SIGINT once ``csv`` holds ``min_bytes``
+    (or after ``wait`` [s]), and return (exit status, stderr). ``between_polls`` runs
+    before each check (e.g. to feed a server with commands)."""
+    process = subprocess.Popen(
+        [*CLI, *arguments], cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        deadline = time.monotonic() + wait
+        while time.monotonic() < deadline:
+            if between_polls is not None:
+                between_polls()
+            if csv.is_file() and csv.stat().st_size > min_bytes:
+                break
+            time.sleep(poll_interval)
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    return process.returncode, stderr

@@ -1,22 +1,18 @@
 """Command line: runs write their folders, bad input exits 2 with a message, Ctrl-C keeps data."""
 
 import json
-import signal
 import subprocess
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.io import savemat
 
+from conftest import CLI, interrupt_when_recording
 from pneumaquad.params import load_rig
 from pneumaquad.recording import read_recording
 from pneumaquad.rig import signals
 from pneumaquad.rig.experiment import run_rig_experiment
-
-CLI = [sys.executable, "-c", "from pneumaquad.cli import main; main()"]
 
 
 def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
@@ -193,24 +189,12 @@ def test_ctrl_c_on_the_command_line_keeps_the_recording(tmp_path: Path) -> None:
     """A real SIGINT to a running `rig track`: exit status 130, readable files, summary
     marked interrupted."""
     out = tmp_path / "long"
-    process = subprocess.Popen(
-        [*CLI, "rig", "track", "sine", "--duration", "3000 s", "-o", str(out)],
-        cwd=tmp_path,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
     csv = out / "recording.csv"
-    try:
-        for _ in range(600):  # wait (at most 60 s) until rows are being written
-            if csv.is_file() and csv.stat().st_size > 10_000:
-                break
-            time.sleep(0.1)
-        process.send_signal(signal.SIGINT)
-        _, stderr = process.communicate(timeout=120)
-    finally:
-        process.kill()
-    assert process.returncode == 130, stderr
+    returncode, stderr = interrupt_when_recording(  # wait at most 60 s for rows
+        ["rig", "track", "sine", "--duration", "3000 s", "-o", str(out)], csv, 10_000, 60.0,
+        cwd=tmp_path,
+    )
+    assert returncode == 130, stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["interrupted"] is True
     recording = read_recording(out / "recording.parquet")

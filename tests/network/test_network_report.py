@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from conftest import interrupt_when_recording
 from pneumaquad.network.actuator_side import ActuatorSide
 from pneumaquad.network.client import ActuatorClient
 from pneumaquad.network.dynamics_side import DynamicsSide
@@ -54,11 +55,7 @@ def test_ctrl_c_stops_the_dynamics_server_with_its_files(tmp_path: Path) -> None
     """A real SIGINT to `pneumaquad serve dynamics` in real time: exit status 130, the
     recording and the packet files written and readable."""
     import json
-    import signal
     import socket
-    import subprocess
-    import sys
-    import time
 
     from pneumaquad.network.protocol import MessageType, encode_command
     from pneumaquad.recording import read_recording
@@ -67,30 +64,25 @@ def test_ctrl_c_stops_the_dynamics_server_with_its_files(tmp_path: Path) -> None
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    process = subprocess.Popen(
-        [sys.executable, "-c", "from pneumaquad.cli import main; main()", "serve", "dynamics",
-         "--command", "valve", "--mode", "realtime", "--port", str(port), "--record-every",
-         "10", "-o", str(out)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
     client = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    try:
-        csv = out / "recording.csv"
-        deadline = time.monotonic() + 120.0  # a cold numba cache takes a while to start
-        sequence = 0
-        while time.monotonic() < deadline:  # valve commands until rows are being written
-            sequence += 1
-            client.sendto(encode_command(MessageType.VALVE_COMMAND, sequence, 0.0,
-                                         np.full(12, 5.25)), ("127.0.0.1", port))
-            time.sleep(0.002)
-            if csv.is_file() and csv.stat().st_size > 20_000:
-                break
-        process.send_signal(signal.SIGINT)
-        _, stderr = process.communicate(timeout=60)
+    sequence = 0
+
+    def send_command() -> None:  # valve commands until rows are being written
+        nonlocal sequence
+        sequence += 1
+        client.sendto(encode_command(MessageType.VALVE_COMMAND, sequence, 0.0,
+                                     np.full(12, 5.25)), ("127.0.0.1", port))
+
+    try:  # a cold numba cache takes a while to start
+        returncode, stderr = interrupt_when_recording(
+            ["serve", "dynamics", "--command", "valve", "--mode", "realtime", "--port",
+             str(port), "--record-every", "10", "-o", str(out)],
+            out / "recording.csv", 20_000, 120.0, between_polls=send_command,
+            poll_interval=0.002,
+        )
     finally:
-        process.kill()
         client.close()
-    assert process.returncode == 130, stderr
+    assert returncode == 130, stderr
     recording = read_recording(out / "recording.parquet")
     assert recording["time [s]"].size > 10
     assert json.loads((out / "timing.json").read_text())["received [count]"] > 10

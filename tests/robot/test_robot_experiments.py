@@ -3,10 +3,7 @@
 from __future__ import annotations
 
 import json
-import signal
 import subprocess
-import sys
-import time
 from pathlib import Path
 
 import mujoco
@@ -14,6 +11,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from conftest import CLI, interrupt_when_recording
 from pneumaquad.cli import app
 from pneumaquad.control.pid import G_KD, G_KI, G_KP
 from pneumaquad.params import load_robot
@@ -28,8 +26,6 @@ from pneumaquad.robot.scenarios import (
     stand_up_phases,
 )
 from pneumaquad.robot.simulation import RobotSimulation, stance_swing_schedule
-
-CLI = [sys.executable, "-c", "from pneumaquad.cli import main; main()"]
 
 
 def _simulation(configuration: str = "fixed", *overrides: str) -> RobotSimulation:
@@ -177,21 +173,12 @@ def test_cli_rejects_bad_robot_values(tmp_path: Path) -> None:
 
 def test_ctrl_c_keeps_the_robot_recording(tmp_path: Path) -> None:
     out = tmp_path / "long"
-    process = subprocess.Popen(
-        [*CLI, "robot", "stand", "--hold", "3000", "--no-video", "-o", str(out)],
-        cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )
     csv = out / "recording.csv"
-    try:
-        for _ in range(1200):
-            if csv.is_file() and csv.stat().st_size > 200_000:
-                break
-            time.sleep(0.1)
-        process.send_signal(signal.SIGINT)
-        _, stderr = process.communicate(timeout=120)
-    finally:
-        process.kill()
-    assert process.returncode == 130, stderr
+    returncode, stderr = interrupt_when_recording(
+        ["robot", "stand", "--hold", "3000", "--no-video", "-o", str(out)], csv, 200_000, 120.0,
+        cwd=tmp_path,
+    )
+    assert returncode == 130, stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["interrupted"] is True
     recording = read_recording(out / "recording.parquet")
