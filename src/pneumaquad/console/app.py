@@ -28,12 +28,14 @@ from pneumaquad.layout import P_PATM, P_PS
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.errors import SimulationDivergedError
+from pneumaquad.robot.feedback import FootFeedback, foot_feedback
 from pneumaquad.robot.scenarios import STANDING_ANGLES, standing_height
 from pneumaquad.robot.simulation import RobotSimulation
 
+from .devices import DeviceLink, DeviceServer
 from .gui import ConsoleControls
 from .replay import ReplayError, ReplayRun, Stability, static_stability
-from .scene import RobotScene, StabilityOverlay
+from .scene import FeedbackArrows, RobotScene, StabilityOverlay
 from .teleop import FootTeleoperation
 
 __all__ = ["ConsoleApp", "initial_pose"]
@@ -78,12 +80,15 @@ class ConsoleApp:
         Simulated time per chunk [s] between scene/GUI updates.
     real_time : bool
         Pace the simulation to the wall clock (else run as fast as it goes).
+    device_port : int, optional
+        UDP port for external input devices (:mod:`.devices`) on ``host``; 0 picks a
+        free one (see ``app.devices.server.port``); None: no device port.
     """
 
     def __init__(self, params: str = "crr-quadruped", configuration: str = "quadruped",
                  environment: str = "flat", host: str = "127.0.0.1", port: int = 8080,
                  overrides: Sequence[str] = (), chunk: float = 0.02,
-                 real_time: bool = True) -> None:
+                 real_time: bool = True, device_port: int | None = None) -> None:
         self.params = params
         self.overrides = list(overrides)
         self.chunk = chunk
@@ -103,6 +108,11 @@ class ConsoleApp:
         self.replay_playing = False
         self.stability = Stability()
         self.overlay = StabilityOverlay(self.server)
+        self.feedback_arrows = FeedbackArrows(self.server)
+        self.feedback: FootFeedback | None = None
+        self.devices: DeviceLink | None = None
+        if device_port is not None:
+            self.devices = DeviceLink(DeviceServer(host, device_port))
         self._build(configuration, environment)
         self.controls = ConsoleControls(self)
         self.refresh()
@@ -187,6 +197,8 @@ class ConsoleApp:
     def advance(self, steps: int | None = None) -> None:
         """Advance ``steps`` control steps (one chunk by default) and refresh the views."""
         with self.lock:
+            if self.devices is not None:
+                self.devices.apply_inputs(self.teleop, self.simulation.robot.legs)
             try:
                 self.simulation.step(self.chunk_steps if steps is None else steps)
             except SimulationDivergedError as error:
@@ -194,6 +206,8 @@ class ConsoleApp:
                 self.message = str(error)
                 initial_pose(self.simulation)
             self.refresh()
+            if self.devices is not None and self.feedback is not None:
+                self.devices.send_feedback(self.simulation, self.teleop, self.feedback)
 
     def refresh(self) -> None:
         """Copy the simulation (or the replayed sample) state into the scene and the GUI."""
@@ -205,6 +219,8 @@ class ConsoleApp:
             self.scene.update(data)
             thorax = self.simulation.robot.thorax_id
             self.teleop.follow_thorax(data.xpos[thorax].copy(), data.xquat[thorax].copy())
+            self.feedback = foot_feedback(self.simulation)
+            self.feedback_arrows.update(self.simulation, self.feedback, list(self.teleop.legs))
             self.stability = static_stability(self.simulation)
             self.overlay.update(self.stability)
             self.controls.update()
@@ -279,6 +295,7 @@ class ConsoleApp:
         index = replay.show(self.replay_time)
         row = replay.row_at(self.replay_time)
         self.replay_scene.update(replay.data)
+        self.feedback_arrows.hide()
         self.stability = replay.stability(row)
         self.overlay.update(self.stability)
         self.controls.update_replay(replay, index, row)
@@ -319,6 +336,8 @@ class ConsoleApp:
         self._stop.set()
         self._wake.set()
         self._thread.join(timeout=5.0)
+        if self.devices is not None:
+            self.devices.close()
         self.server.stop()
 
     # --- pneumatics and control ------------------------------------------------------

@@ -20,7 +20,8 @@ __all__ = ["console_command", "serve_console"]
 def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped",
                   environment: str = "flat", host: str = "127.0.0.1", port: int = 8080,
                   duration: float | None = None, overrides: list[str] | None = None,
-                  start: bool = False, replay: Path | None = None) -> None:
+                  start: bool = False, replay: Path | None = None,
+                  device_port: int | None = None) -> None:
     """Run the console until Ctrl-C (or for ``duration`` wall seconds), then stop cleanly.
 
     Parameters
@@ -33,13 +34,18 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
         Start the simulation immediately instead of paused.
     replay : Path, optional
         A run folder to open in replay mode at once (see :meth:`ConsoleApp.open_run`).
+    device_port : int, optional
+        UDP port for external input devices on ``host`` (0: any free port); none by default.
     """
     from .app import ConsoleApp
 
     app = ConsoleApp(params, configuration, environment, host=host, port=port,
-                     overrides=overrides or [])
+                     overrides=overrides or [], device_port=device_port)
     shown = "localhost" if app.host in ("127.0.0.1", "::1") else app.host
     console.print(f"Operator console on http://{shown}:{app.port} (Ctrl-C stops)")
+    if app.devices is not None:
+        server = app.devices.server
+        console.print(f"Input devices: UDP {server.host}:{server.port}")
     if app.host not in ("127.0.0.1", "::1", "localhost"):
         console.print(f"[yellow]warning:[/] bound to {app.host}: anyone who can reach this "
                       "port can drive the simulation (no authentication)")
@@ -84,7 +90,11 @@ def console_command(
     replay: Annotated[
         Path | None, typer.Option("--replay", help="Open this run folder in replay mode.")
     ] = None,
+    device_port: Annotated[
+        int | None,
+        typer.Option("--device-port", help="UDP port for external input devices (0: any)."),
+    ] = None,
 ) -> None:
     """Operator console in the browser: live 3-D robot, run controls, teleoperation."""
     serve_console(params, configuration, environment, host, port, duration, overrides, start,
-                  replay)
+                  replay, device_port)

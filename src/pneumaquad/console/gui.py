@@ -17,6 +17,8 @@ import viser.uplot as uplot
 from pneumaquad.robot.builder import CONFIGURATIONS
 from pneumaquad.robot.environment import ENVIRONMENTS
 
+from .devices import feedback_status
+
 if TYPE_CHECKING:
     from .app import ConsoleApp
     from .replay import ReplayRun
@@ -95,6 +97,7 @@ class ConsoleControls:
             self.scale = gui.add_slider("Scale", 0.2, 3.0, 0.1, 1.0)
             self.shift = gui.add_vector3("Offset shift [m]", (0.0, 0.0, 0.0), step=0.01)
             self.teleop_status = gui.add_markdown("")
+            self.feedback_readout = gui.add_markdown("")
         with gui.add_folder(f"Plots ({PLOTTED_LEG})"):
             empty = tuple(np.zeros(1) for _ in range(7))
             angle_series = [uplot.Series(label="t [s]")]
@@ -191,6 +194,7 @@ class ConsoleControls:
                                f"t = {time_s:.2f} s, sample {index} of {len(replay.times) - 1}")
         self.replay_status.content = f"Replaying `{replay.folder}`, {replay.duration:.2f} s"
         self.teleop_status.content = "(replay: teleoperation off)"
+        self.feedback_readout.content = ""
         self._show_stability()
         if row is None:
             self.readout.content = "No recording (recording.parquet) in this run folder."
@@ -270,6 +274,9 @@ class ConsoleControls:
             f"Contacts: {app.scene.contact_count}"
         )
         self.teleop_status.content = app.teleop.status()
+        if app.feedback is not None:
+            self.feedback_readout.content = feedback_status(
+                simulation, app.feedback, list(app.teleop.legs), app.devices)
         self._show_stability()
         joints = self._joints()
         if joints is None:

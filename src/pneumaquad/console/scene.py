@@ -19,16 +19,20 @@ import viser
 from pneumaquad.robot.builder import RobotModel
 
 if TYPE_CHECKING:
+    from pneumaquad.robot.feedback import FootFeedback
+    from pneumaquad.robot.simulation import RobotSimulation
+
     from .replay import ReplayRun, Stability
 
-__all__ = ["RobotScene", "StabilityOverlay", "capsule_mesh", "cylinder_mesh",
-           "geom_node_name"]
+__all__ = ["FeedbackArrows", "RobotScene", "StabilityOverlay", "capsule_mesh",
+           "cylinder_mesh", "geom_node_name"]
 
 #: Length of a contact-force arrow per newton [m/N].
 FORCE_ARROW_SCALE = 0.004
 _CYLINDER_COLOUR = (190, 190, 200)
 _CONTACT_COLOUR = (255, 60, 40)
 _FORCE_COLOUR = (255, 170, 0)
+_FEEDBACK_COLOUR = (200, 40, 255)
 _GROUND_SIZE = 6.0
 _POLYGON_COLOUR = (40, 120, 255)
 _COM_STABLE_COLOUR = (40, 200, 80)
@@ -294,3 +298,37 @@ class StabilityOverlay:
         if not np.isfinite(margin):
             return _COM_UNKNOWN_COLOUR
         return _COM_UNSTABLE_COLOUR if margin < 0.0 else _COM_STABLE_COLOUR
+
+
+class FeedbackArrows:
+    """Total feedback force (contact + actuator resistance) of each commanded foot.
+
+    A magenta line segment from the foot site along the force,
+    :data:`FORCE_ARROW_SCALE` m per N (see :mod:`pneumaquad.robot.feedback`).
+    """
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        self.server = server
+        self.segments = server.scene.add_line_segments(
+            "/feedback/forces", np.zeros((1, 2, 3)), _FEEDBACK_COLOUR, thickness=0.01,
+            visible=False,
+        )
+
+    def update(self, simulation: RobotSimulation, feedback: FootFeedback,
+               legs: list[str]) -> None:
+        """Draw the total feedback force of ``legs`` from their foot positions."""
+        if not legs:
+            self.hide()
+            return
+        indices = [feedback.legs.index(leg) for leg in legs]
+        feet = simulation.foot_positions()[indices]
+        arrows = np.stack([feet, feet + FORCE_ARROW_SCALE * feedback.total[indices]], axis=1)
+        with self.server.atomic():
+            self.segments.points = arrows.astype(np.float32)
+            self.segments.colors = np.tile(np.array(_FEEDBACK_COLOUR, dtype=np.uint8),
+                                           (len(legs), 2, 1))
+            self.segments.visible = True
+
+    def hide(self) -> None:
+        """Hide the arrows (replay mode)."""
+        self.segments.visible = False

@@ -81,6 +81,10 @@ class CrawlGait:
         (0: no sway, 1: the centre of mass over the incentres' mean lateral position).
     com_offset : (2,) array [m]
         Ground projection of the centre of mass in the body frame.
+    lift_fraction : float
+        Fraction ℓ < 0.5 of the swing at its start (and at its end) in which the foot only
+        rises (lowers), without moving along the ground: a foot still carrying load at
+        lift-off is not dragged. 0: rise and travel together (one cycloid).
     """
 
     neutral_feet: Array
@@ -91,6 +95,7 @@ class CrawlGait:
     heading: float = 0.0
     sway: float = 1.0
     com_offset: Array = dataclasses.field(default_factory=lambda: np.zeros(2))
+    lift_fraction: float = 0.0
 
     def __post_init__(self) -> None:
         feet = np.array(self.neutral_feet, dtype=float)
@@ -102,6 +107,8 @@ class CrawlGait:
             raise ValueError(f"duty factor {self.duty_factor} must be in [0.75, 1)")
         if self.period <= 0.0 or self.stride < 0.0 or self.step_height < 0.0:
             raise ValueError("period must be positive, stride and step height non-negative")
+        if not 0.0 <= self.lift_fraction < 0.5:
+            raise ValueError(f"lift fraction {self.lift_fraction} must be in [0, 0.5)")
         if self.sway != 0.0 and self.duty_factor <= 0.75:
             raise ValueError("body sway needs four-legged phases: duty factor > 0.75")
 
@@ -157,10 +164,16 @@ def foot_positions_ground(gait: CrawlGait, times: ArrayLike) -> Array:
     along = 0.5 * gait.stride + gait.speed * touchdown  # foothold along the direction
     progress = np.clip(phase / swing, 0.0, 1.0)
     in_swing = phase < swing
-    cycloid = progress - np.sin(2.0 * math.pi * progress) / (2.0 * math.pi)
+    edge = gait.lift_fraction
+    moving = np.clip((progress - edge) / (1.0 - 2.0 * edge), 0.0, 1.0)
+    cycloid = moving - np.sin(2.0 * math.pi * moving) / (2.0 * math.pi)
     along = np.where(in_swing, along - travel * (1.0 - cycloid), along)
-    lift = np.where(in_swing, 0.5 * gait.step_height * (1.0 - np.cos(2.0 * math.pi * progress)),
-                    0.0)
+    if edge > 0.0:  # rise over ℓ, stay up, lower over the last ℓ (half-cosine ramps)
+        ramp = np.clip(np.minimum(progress, 1.0 - progress) / edge, 0.0, 1.0)
+        height = 0.5 * (1.0 - np.cos(math.pi * ramp))
+    else:
+        height = 0.5 * (1.0 - np.cos(2.0 * math.pi * progress))
+    lift = np.where(in_swing, gait.step_height * height, 0.0)
     feet = np.empty((*times.shape, 4, 3))
     feet[..., :2] = gait.neutral_feet[:, :2] + along[..., None] * gait.direction
     feet[..., 2] = lift

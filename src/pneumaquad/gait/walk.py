@@ -75,7 +75,7 @@ def _body_com(robot: RobotModel, angles: Array) -> Array:
 def robot_gait(robot: RobotModel, speed: float, heading: float = 0.0,
                duty_factor: float = 0.8, period: float = 4.0, step_height: float = 0.04,
                sway: float = 1.0, angles: Array = STANDING_ANGLES,
-               minimum_margin: float | None = None) -> CrawlGait:
+               minimum_margin: float | None = None, lift_fraction: float = 0.0) -> CrawlGait:
     """A crawl gait for ``robot`` about its feet at ``angles`` (speed [m/s], heading [rad]).
 
     The stride is speed·β·T; the centre of mass is the robot's in the pose ``angles``.
@@ -85,7 +85,8 @@ def robot_gait(robot: RobotModel, speed: float, heading: float = 0.0,
     com = _body_com(robot, np.tile(angles, len(robot.legs)))
     gait = CrawlGait(standing_feet(robot, angles), duty_factor=duty_factor, period=period,
                      stride=speed * duty_factor * period, step_height=step_height,
-                     heading=heading, sway=sway, com_offset=com)
+                     heading=heading, sway=sway, com_offset=com,
+                     lift_fraction=lift_fraction)
     return gait if minimum_margin is None else sway_for_margin(gait, minimum_margin)
 
 

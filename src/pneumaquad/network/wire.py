@@ -52,13 +52,16 @@ class MessageType(IntEnum):
     PONG = 6  # echoed ping sender time [s], responder receive time [s]
     HELLO = 7  # joint count [-], control step [s]
     BYE = 8  # no payload
+    DEVICE_INPUT = 16  # input device -> console: leg index, stylus x, y, z [m], buttons
+    DEVICE_FEEDBACK = 17  # console -> device: leg, force x, y, z [N], normal force [N], clamped
 
 
 #: Types whose payload is one value per joint.
 COMMAND_TYPES = frozenset(
     {MessageType.VALVE_COMMAND, MessageType.FORCE_COMMAND, MessageType.TORQUE_COMMAND})
 _FIXED_COUNTS = {MessageType.PING: 0, MessageType.PONG: 2, MessageType.HELLO: 2,
-                 MessageType.BYE: 0}
+                 MessageType.BYE: 0, MessageType.DEVICE_INPUT: 5,
+                 MessageType.DEVICE_FEEDBACK: 6}
 _STATE_EXTRA = 10  # time, thorax position (3), quaternion (4), answered sequence, status
 
 

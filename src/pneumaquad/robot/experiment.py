@@ -55,6 +55,11 @@ class Phase:
         Joints under position control.
     open_loop_voltage : ndarray, optional
         (joints,) valve voltages [V] for joints in open loop (NaN = not open loop).
+    feedback : bool
+        Call ``references`` once per recorded chunk, with that chunk's times, instead of
+        once for the whole phase: a reference function that reads the simulation's
+        state (e.g. :class:`.stance_control.StanceController`) closes a loop at the
+        recording rate.
     """
 
     name: str
@@ -62,6 +67,7 @@ class Phase:
     references: ReferenceFunction | np.ndarray
     closed_loop: np.ndarray
     open_loop_voltage: np.ndarray | None = None
+    feedback: bool = False
 
     def modes(self) -> np.ndarray:
         """Per-joint control mode codes of :mod:`pneumaquad.robot.coupling`."""
@@ -147,7 +153,8 @@ def run_phases(
                 modes = phase.modes()
                 voltages = phase.open_loop_voltage
                 steps = round(phase.duration / dt)
-                table = _reference_table(phase, simulation.time, steps, dt, count)
+                if not phase.feedback:
+                    table = _reference_table(phase, simulation.time, steps, dt, count)
                 simulation.extra[:, X_COMMANDED] = modes
                 if voltages is not None:
                     simulation.open_loop_voltage[:] = np.where(
@@ -156,9 +163,14 @@ def run_phases(
                 done = 0
                 while done < steps and not stop.requested:
                     chunk = min(every, steps - done)
-                    simulation.step(chunk, table, done)
+                    if phase.feedback:
+                        rows = _reference_table(phase, simulation.time, chunk, dt, count)
+                        simulation.step(chunk, rows, 0)
+                    else:
+                        rows = table[done : done + chunk]
+                        simulation.step(chunk, table, done)
                     done += chunk
-                    recorder.append(recording_row(simulation, table[done - 1]))
+                    recorder.append(recording_row(simulation, rows[-1]))
                     times.append(simulation.time)
                     qpos.append(simulation.data.qpos.copy())
                     if progress is not None and done % (every * 20) == 0:

@@ -10,7 +10,7 @@ went, whether it fell, slipped, hit a joint limit, or lost static stability.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -22,8 +22,10 @@ from .builder import RobotModel
 from .experiment import Phase
 from .scenarios import stand_up_phases
 from .simulation import RobotSimulation
+from .stance_control import StanceControlGains, StanceController
 
-__all__ = ["WALKING_ANGLES", "WalkSettings", "walking_outcome", "walking_phases"]
+__all__ = ["WALKING_ANGLES", "WalkSettings", "contact_slide", "walking_outcome",
+           "walking_phases"]
 
 #: Alpha, beta, gamma [rad] the gait is planned about: every IK sample stays reachable
 #: (the standing gamma of 90° is too close to its 95° limit to lift and sway).
@@ -33,7 +35,9 @@ WALKING_ANGLES = np.radians([0.0, -20.0, 80.0])
 @dataclass(frozen=True)
 class WalkSettings:
     """Gait settings: speed [m/s], heading [rad], duty factor, period [s], step height
-    [m], planned minimum static margin [m], distance to walk [m]."""
+    [m], planned minimum static margin [m], distance to walk [m], the swing's share of
+    pure lift and lowering (:class:`pneumaquad.gait.crawl.CrawlGait`), and the stance
+    control gains (None: play the planned joint angles open-loop in the body height)."""
 
     speed: float = 0.03
     heading: float = 0.0
@@ -42,6 +46,8 @@ class WalkSettings:
     step_height: float = 0.04
     minimum_margin: float = 0.04
     distance: float = 1.0
+    lift_fraction: float = 0.0
+    stance_control: StanceControlGains | None = field(default_factory=StanceControlGains)
 
     def duration(self) -> float:
         """Walking time [s] for the distance, in whole gait cycles."""
@@ -65,6 +71,7 @@ def walking_phases(
         step_height=settings.step_height,
         angles=WALKING_ANGLES,
         minimum_margin=settings.minimum_margin,
+        lift_fraction=settings.lift_fraction,
     )
     duration = settings.duration()
     plan = plan_walk(robot, gait, duration)
@@ -85,12 +92,34 @@ def walking_phases(
                         len(plan.references) - 1)
         return plan.references[index]
 
+    if settings.stance_control is None:
+        walking = Phase("walk", duration, walk, closed)
+    else:
+        controller = StanceController(simulation, gait, plan, walk_start,
+                                      settings.stance_control)
+        walking = Phase("walk", duration, controller, closed, feedback=True)
     phases += [
         Phase("to walking pose", 2.0, to_walking_pose, closed),
-        Phase("walk", duration, walk, closed),
+        walking,
         Phase("stop", 1.0, plan.references[-1], closed),
     ]
     return phases, plan
+
+
+def contact_slide(foot_xy: np.ndarray, loaded: np.ndarray) -> float:
+    """Total slide [m] of one foot: the sum, over its stretches of continuous load, of the
+    distance between where the stretch began and where it ended.
+
+    Parameters
+    ----------
+    foot_xy : (n, 2) [m]  foot positions on the ground at the recording instants.
+    loaded : (n,) bool  the foot carries load.
+    """
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], loaded.astype(int), [0]])))
+    total = 0.0
+    for first, end in zip(edges[::2], edges[1::2], strict=True):
+        total += float(np.linalg.norm(foot_xy[end - 1] - foot_xy[first]))
+    return total
 
 
 def walking_outcome(
@@ -102,7 +131,9 @@ def walking_outcome(
     Criteria: **fall** — thorax below 0.15 m or |roll|, |pitch| above 30° during the walk;
     **margin violation** — the recorded static margin below 0 for more than 5 % of the walk
     (feet carrying load, whole-robot centre of mass); **slip** — loaded feet sliding more
-    than 10 cm on the ground per metre travelled (a leg's total); **joint limit** — a joint
+    than 10 cm on the ground per metre travelled (a leg's total of
+    :func:`contact_slide`; the path length of loaded feet, which also counts sub-millimetre
+    contact jitter, is reported beside it); **joint limit** — a joint
     within 0.5° of a limit for more than 20 % of the walk; the run succeeds when none of
     these happened and the thorax travelled at least 90 % of the distance along the
     heading (else **too slow**).
@@ -123,13 +154,14 @@ def walking_outcome(
     )
     margin = recording["stability margin [m]"][walking]
     violated = float(np.mean(~(margin >= 0.0)))
-    slip = 0.0
+    slip, path = 0.0, 0.0
     for leg in robot.legs:
         loaded = recording[f"{leg} foot normal force [N]"][walking] > STANCE_FORCE
         foot = np.column_stack([recording[f"{leg} foot x [m]"][walking],
                                 recording[f"{leg} foot y [m]"][walking]])
+        slip = max(slip, contact_slide(foot, loaded))
         moved = np.linalg.norm(np.diff(foot, axis=0), axis=1)
-        slip = max(slip, float(np.sum(moved[loaded[1:] & loaded[:-1]])))
+        path = max(path, float(np.sum(moved[loaded[1:] & loaded[:-1]])))
     reasons = []
     if fallen:
         reasons.append("fall")
@@ -155,6 +187,7 @@ def walking_outcome(
         "time with negative static margin [%]": 100.0 * violated,
         "smallest static margin [m]": float(np.nanmin(margin)) if margin.size else math.nan,
         "largest stance-foot slide [m]": slip,
+        "largest loaded-foot path [m]": path,
         "joints at a limit": at_limit,
         "air per metre [NL/m]": air / travelled if travelled > 0 else math.nan,
     }
