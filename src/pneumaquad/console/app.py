@@ -37,6 +37,7 @@ from .gui import ConsoleControls
 from .replay import ReplayError, ReplayRun, Stability, static_stability
 from .scene import FeedbackArrows, RobotScene, StabilityOverlay
 from .teleop import FootTeleoperation
+from .walking import ConsoleWalking
 
 __all__ = ["ConsoleApp", "initial_pose"]
 
@@ -139,6 +140,7 @@ class ConsoleApp:
         self.scene = RobotScene(self.server, robot)
         self.teleop = FootTeleoperation(self.server, simulation, self.home_angles,
                                         lock=self.lock)
+        self.walking = ConsoleWalking(simulation)
 
     def rebuild(self, configuration: str, environment: str) -> None:
         """Build a new model (configuration/environment), keeping supply and gain settings."""
@@ -191,6 +193,8 @@ class ConsoleApp:
             self._leave_replay()
             self.home_angles = initial_pose(self.simulation)
             self.teleop.reset()
+            self.walking = ConsoleWalking(self.simulation)
+            self.teleop.enabled = True
             self.controls.clear_history()
             self.refresh()
 
@@ -199,8 +203,13 @@ class ConsoleApp:
         with self.lock:
             if self.devices is not None:
                 self.devices.apply_inputs(self.teleop, self.simulation.robot.legs)
+            count = self.chunk_steps if steps is None else steps
+            if self.walking.mode == "shared":
+                self.walking.place_front_feet(
+                    {leg: state.target for leg, state in self.teleop.legs.items()})
+            self.walking.before_chunk(count * self.simulation.control_step)
             try:
-                self.simulation.step(self.chunk_steps if steps is None else steps)
+                self.simulation.step(count)
             except SimulationDivergedError as error:
                 self.running = False
                 self.message = str(error)
@@ -208,6 +217,24 @@ class ConsoleApp:
             self.refresh()
             if self.devices is not None and self.feedback is not None:
                 self.devices.send_feedback(self.simulation, self.teleop, self.feedback)
+
+    def set_walking(self, mode: str | None = None, speed: float | None = None,
+                    heading: float | None = None) -> None:
+        """Walking mode (off, automatic, shared), body speed [m/s] and heading [rad].
+
+        A walking mode takes all twelve joints (the styluses then only choose the front
+        footholds, in shared mode); ``off`` hands the front legs back to the styluses.
+        """
+        with self.lock:
+            if mode is not None:
+                self.walking.set_mode(mode)
+                self.teleop.enabled = self.walking.mode == "off"
+                if self.teleop.enabled:
+                    self.teleop.apply_all()
+            if speed is not None or heading is not None:
+                self.walking.command(self.walking.speed if speed is None else speed,
+                                     self.walking.heading if heading is None else heading)
+            self.controls.update()
 
     def refresh(self) -> None:
         """Copy the simulation (or the replayed sample) state into the scene and the GUI."""

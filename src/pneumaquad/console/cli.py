@@ -38,6 +38,7 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
         UDP port for external input devices on ``host`` (0: any free port); none by default.
     """
     from .app import ConsoleApp
+    from .keyboard import HELP, KeyboardControl
 
     app = ConsoleApp(params, configuration, environment, host=host, port=port,
                      overrides=overrides or [], device_port=device_port)
@@ -56,6 +57,12 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
             console.print(f"[yellow]warning:[/] {app.message}")
     elif start:
         app.start()
+    keyboard = KeyboardControl(
+        lambda: (app.walking.mode, app.walking.speed, app.walking.heading),
+        lambda mode, speed, heading: (app.set_walking(mode, speed, heading),
+                                      app.controls.show_walking_command()))
+    if keyboard.active:
+        console.print(HELP)
     deadline = None if duration is None else time.monotonic() + duration
     try:
         with deferred_interrupt() as stop:
@@ -64,6 +71,7 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
     except KeyboardInterrupt:  # a second Ctrl-C
         pass
     finally:
+        keyboard.close()
         app.close()
     console.print("Console stopped.")
 

@@ -6,6 +6,7 @@ Each control's handler calls one public method of :class:`pneumaquad.console.app
 
 from __future__ import annotations
 
+import math
 import time
 from collections import deque
 from typing import TYPE_CHECKING
@@ -18,6 +19,7 @@ from pneumaquad.robot.builder import CONFIGURATIONS
 from pneumaquad.robot.environment import ENVIRONMENTS
 
 from .devices import feedback_status
+from .walking import MAX_SPEED, WALKING_MODES
 
 if TYPE_CHECKING:
     from .app import ConsoleApp
@@ -78,6 +80,14 @@ class ConsoleControls:
             self.replay_status = gui.add_markdown("")
         with gui.add_folder("Stability"):
             self.stability = gui.add_markdown("")
+        with gui.add_folder("Walking"):
+            self.walk_mode = gui.add_dropdown("Walking mode", WALKING_MODES,
+                                              initial_value="off")
+            self.walk_speed = gui.add_slider("Speed [mm/s]", -1000 * MAX_SPEED,
+                                             1000 * MAX_SPEED, 5.0, 0.0)
+            self.walk_heading = gui.add_slider("Heading [deg]", -180.0, 180.0, 5.0, 0.0)
+            self.walk_stop = gui.add_button("Stop walking", icon=viser.Icon.PLAYER_STOP)
+            self.walk_status = gui.add_markdown("")
         with gui.add_folder("Model"):
             self.configuration = gui.add_dropdown("Configuration", CONFIGURATIONS,
                                                   initial_value=app.configuration)
@@ -137,6 +147,31 @@ class ConsoleControls:
             lambda _event: app.set_mapping(enabled=self.teleop_enabled.value))
         self.scale.on_update(lambda _event: app.set_mapping(scale=self.scale.value))
         self.shift.on_update(lambda _event: app.set_mapping(shift=self.shift.value))
+        self.walk_mode.on_update(lambda _event: self._walk())
+        self.walk_speed.on_update(lambda _event: self._walk())
+        self.walk_heading.on_update(lambda _event: self._walk())
+        self.walk_stop.on_click(lambda _event: self._stop_walking())
+
+    def _walk(self) -> None:
+        if self._syncing:
+            return
+        self.app.set_walking(self.walk_mode.value, self.walk_speed.value / 1000.0,
+                             math.radians(self.walk_heading.value))
+
+    def _stop_walking(self) -> None:
+        self.walk_speed.value = 0.0
+        self.app.set_walking(speed=0.0)
+
+    def show_walking_command(self) -> None:
+        """Move the walking widgets to the app's present command (set from elsewhere)."""
+        walking = self.app.walking
+        self._syncing = True
+        try:
+            self.walk_mode.value = walking.mode
+            self.walk_speed.value = round(1000.0 * walking.speed)
+            self.walk_heading.value = round(math.degrees(walking.heading))
+        finally:
+            self._syncing = False
 
     def _rebuild(self) -> None:
         if (self.configuration.value, self.environment.value) != (
@@ -274,6 +309,7 @@ class ConsoleControls:
             f"Contacts: {app.scene.contact_count}"
         )
         self.teleop_status.content = app.teleop.status()
+        self.walk_status.content = app.walking.status()
         if app.feedback is not None:
             self.feedback_readout.content = feedback_status(
                 simulation, app.feedback, list(app.teleop.legs), app.devices)

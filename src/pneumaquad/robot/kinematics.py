@@ -451,6 +451,14 @@ def _blocking_limits(candidates: list[Array], table: DHTable) -> str:
     return "blocked by joint limits (" + "; ".join(reasons) + ")"
 
 
+def exact_solutions(table: DHTable, foot_target: ArrayLike) -> list[Array]:
+    """The analytic IK answers (3,) [rad] inside the joint limits (empty: unreachable);
+    no search, so cheap enough for every control chunk."""
+    target = _checked(foot_target, (3,), "foot_target")
+    return [angles for angles in _analytic_candidates(table, target)
+            if _within_limits(angles, table)]
+
+
 def inverse_kinematics(
     model: LegGeometry | DHTable, foot_target: ArrayLike, *, clamp: bool = False,
     current_angles: ArrayLike | None = None,

@@ -1,0 +1,185 @@
+"""Walking in the console: the online crawl (:mod:`pneumaquad.gait.online`) on the live robot.
+
+Modes:
+
+``off``        the legs hold their references (the styluses drive the front feet);
+``automatic``  the crawl walks at the commanded body speed and heading (GUI sliders or
+               the keyboard of the terminal running the console, :mod:`.keyboard`);
+``shared``     the operator places the front feet with the styluses (gizmos or UDP
+               devices): a front foot's foothold is its stylus target on the ground; the
+               rear legs follow their front legs and the body follows the feet.
+
+Before each chunk, :meth:`ConsoleWalking.before_chunk` advances the crawl by the chunk's
+duration, refusing a lift that the *measured* state would not support
+(:func:`pneumaquad.gait.crawl.refuse_lift` with the measured feet of the legs the crawl
+has on the ground and the whole robot's measured centre of mass), and commands all
+twelve joints through the leg IK (clamped into the
+limits). The feet are planned in world-aligned axes and turned into the body frame with
+the thorax's measured yaw.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pneumaquad.gait.crawl import LEGS, refuse_lift
+from pneumaquad.gait.online import OnlineCrawl, OnlineCrawlSettings
+from pneumaquad.gait.stability import centre_of_mass
+from pneumaquad.gait.walk import standing_feet, thorax_rotation
+from pneumaquad.robot.kinematics import (
+    DHTable,
+    exact_solutions,
+    foot_jacobian,
+    forward_kinematics_dh,
+)
+from pneumaquad.robot.legs import leg_dh_table
+from pneumaquad.robot.recording import thorax_attitude
+from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.walking import WALKING_ANGLES
+
+__all__ = ["WALKING_MODES", "ConsoleWalking", "reach"]
+
+WALKING_MODES = ("off", "automatic", "shared")
+#: Fastest commanded body speed [m/s].
+MAX_SPEED = 0.05
+
+
+def reach(table: DHTable, target: np.ndarray, current: np.ndarray,
+          iterations: int = 4, damping: float = 0.02) -> np.ndarray:
+    """Joint angles [rad] for a foot ``target`` [m] (thorax frame), inside the limits.
+
+    The analytic IK when the target is reachable; otherwise a few damped least-squares
+    steps from ``current`` clipped into the limits (λ = ``damping`` [m]) — the clamped
+    exact search of :func:`pneumaquad.robot.kinematics.inverse_kinematics` is too slow
+    for every chunk of a live gait, and a swing briefly out of reach only needs the
+    nearest feasible pose approximately.
+    """
+    solutions = exact_solutions(table, target)
+    if solutions:
+        nearest = min(solutions, key=lambda angles: float(np.linalg.norm(angles - current)))
+        return np.clip(nearest, table.lower_limits, table.upper_limits)
+    angles = np.clip(current, table.lower_limits, table.upper_limits)
+    for _ in range(iterations):
+        jacobian = foot_jacobian(table, angles)
+        error = target - forward_kinematics_dh(table, angles)
+        step = jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping**2 * np.eye(3),
+                                            error)
+        angles = np.clip(angles + step, table.lower_limits, table.upper_limits)
+    return angles
+
+
+class ConsoleWalking:
+    """The console's walking controller for one live :class:`RobotSimulation`.
+
+    Parameters
+    ----------
+    simulation : RobotSimulation
+        A free quadruped (other configurations cannot walk: the mode stays ``off``).
+    settings : OnlineCrawlSettings, optional
+    """
+
+    def __init__(self, simulation: RobotSimulation,
+                 settings: OnlineCrawlSettings | None = None) -> None:
+        self.simulation = simulation
+        self.settings = settings or OnlineCrawlSettings()
+        robot = simulation.robot
+        self.available = robot.free and tuple(robot.legs) == LEGS
+        self.mode = "off"
+        self.speed = 0.0
+        self.heading = 0.0
+        self.crawl: OnlineCrawl | None = None
+        self.message = ""
+        if self.available:
+            self.tables = [leg_dh_table(robot, leg) for leg in robot.legs]
+            self.to_thorax = thorax_rotation(robot).T  # body → thorax frame
+
+    def set_mode(self, mode: str) -> None:
+        """Switch mode; walking starts from the feet's present neutral footholds."""
+        if mode not in WALKING_MODES:
+            raise ValueError(f"walking mode {mode!r}: expected one of {WALKING_MODES}")
+        if mode != "off" and not self.available:
+            self.message = "walking needs the free quadruped configuration"
+            mode = "off"
+        self.mode = mode
+        if mode == "off":
+            self.crawl = None
+            return
+        if self.crawl is None:
+            simulation = self.simulation
+            robot = simulation.robot
+            neutral = standing_feet(robot, WALKING_ANGLES)
+            thorax = simulation.data.xpos[robot.thorax_id][:2].copy()
+            com = centre_of_mass(simulation.model, simulation.data) - thorax
+            feet = simulation.foot_positions()[:, :2]
+            self.crawl = OnlineCrawl(neutral, com, thorax, self.settings, footholds=feet)
+        self.crawl.shared = mode == "shared"
+        self.command(self.speed, self.heading)
+
+    def command(self, speed: float, heading: float) -> None:
+        """Body speed [m/s] (clipped to ±:data:`MAX_SPEED`) and heading [rad] (automatic)."""
+        self.speed = float(np.clip(speed, -MAX_SPEED, MAX_SPEED))
+        self.heading = float(heading)
+        if self.crawl is not None:
+            self.crawl.command_velocity(self.speed, self.heading)
+
+    def footholds_from_targets(self, targets: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """World xy [m] of foot targets given in the thorax frame [m], taken relative to
+        the crawl's planned body (not the measured thorax, whose sway and sag would move
+        the operator's footholds with it)."""
+        if self.crawl is None:
+            return {}
+        from_thorax = self.to_thorax.T  # thorax → body frame
+        return {leg: self.crawl.body + (from_thorax @ target)[:2]
+                for leg, target in targets.items()}
+
+    def place_front_feet(self, targets: dict[str, np.ndarray]) -> None:
+        """Shared mode: the operator's front-foot targets (thorax frame [m], e.g. the
+        styluses) become the front legs' footholds."""
+        if self.crawl is not None:
+            for leg, point in self.footholds_from_targets(targets).items():
+                self.crawl.place(leg, point)
+
+    def _yaw(self) -> float:
+        return float(thorax_attitude(self.simulation)[2])
+
+    def before_chunk(self, interval: float) -> None:
+        """Advance the crawl by ``interval`` [s] and command the joints for the chunk."""
+        crawl = self.crawl
+        if crawl is None:
+            return
+        simulation = self.simulation
+        allowed = True
+        if crawl.phase == "shift" and crawl.clock + interval >= crawl.settings.shift_time:
+            feet = simulation.foot_positions()[:, :2]
+            com = centre_of_mass(simulation.model, simulation.data)
+            allowed = not refuse_lift(feet, crawl.stance(), LEGS.index(crawl.leg), com)
+        crawl.advance(interval, allowed)
+        yaw = self._yaw()
+        cos, sin = math.cos(yaw), math.sin(yaw)
+        world_to_body = np.array([[cos, sin, 0.0], [-sin, cos, 0.0], [0.0, 0.0, 1.0]])
+        feet_body = crawl.feet_relative() @ world_to_body.T
+        angles = simulation.reference_angles.copy()
+        for k, table in enumerate(self.tables):
+            target = self.to_thorax @ feet_body[k]
+            current = angles[3 * k : 3 * k + 3]
+            angles[3 * k : 3 * k + 3] = reach(table, target, current)
+        simulation.command_angles(angles)
+
+    def status(self) -> str:
+        """Markdown lines: mode, next leg and phase, planned margin, refusal, steps."""
+        if self.message and self.mode == "off":
+            return self.message
+        if self.crawl is None:
+            return f"mode **{self.mode}**"
+        crawl = self.crawl
+        lines = [
+            f"mode **{self.mode}**, speed {1000 * self.speed:.0f} mm/s, heading "
+            f"{math.degrees(self.heading):.0f}°",
+            f"{crawl.phase} ({crawl.leg}), planned margin {1000 * crawl.margin():.0f} mm, "
+            f"steps {crawl.steps_taken}",
+        ]
+        if crawl.refusal:
+            lines.append(f"⚠ {crawl.refusal}")
+        return "  \n".join(lines)

@@ -1,0 +1,95 @@
+"""Walking in the console: automatic crawl, shared control, fast IK for every chunk."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pneumaquad.console.app import ConsoleApp
+from pneumaquad.console.walking import reach
+from pneumaquad.params import load_robot
+from pneumaquad.robot.builder import build_robot
+from pneumaquad.robot.kinematics import forward_kinematics_dh
+from pneumaquad.robot.legs import leg_dh_table
+
+
+@pytest.fixture
+def app():
+    console = ConsoleApp(configuration="quadruped", environment="flat", port=0,
+                         real_time=False)
+    yield console
+    console.close()
+
+
+def _thorax(app: ConsoleApp) -> np.ndarray:
+    return app.simulation.data.xpos[app.simulation.robot.thorax_id].copy()
+
+
+def test_reach_is_exact_inside_the_workspace_and_within_limits_outside():
+    robot = build_robot(load_robot("crr-quadruped"), "fixed", "flat")
+    table = leg_dh_table(robot, "front_right")
+    home = np.radians([0.0, -20.0, 80.0])
+    foot = forward_kinematics_dh(table, home)
+    assert np.allclose(forward_kinematics_dh(table, reach(table, foot, home)), foot, atol=1e-9)
+    far = foot + np.array([0.0, 0.0, 0.5])  # far out of reach
+    angles = reach(table, far, home)
+    assert np.all(angles >= table.lower_limits) and np.all(angles <= table.upper_limits)
+    reached = forward_kinematics_dh(table, angles)
+    assert np.linalg.norm(reached - far) < np.linalg.norm(foot - far)  # got closer
+
+
+def test_automatic_walking_steps_forward_without_falling(app: ConsoleApp):
+    for _ in range(25):  # settle 0.5 s
+        app.advance()
+    start = _thorax(app)
+    app.set_walking("automatic", speed=0.03, heading=0.0)
+    assert not app.teleop.enabled  # the gait owns all twelve joints
+    for _ in range(400):  # 8 s
+        app.advance()
+    end = _thorax(app)
+    assert app.walking.crawl.steps_taken >= 2
+    assert end[0] - start[0] > 0.02  # forward
+    assert end[2] > 0.25  # standing, not fallen
+    assert "automatic" in app.walking.status()
+    app.set_walking("off")
+    assert app.teleop.enabled
+
+
+def test_shared_walking_places_the_front_foot_at_the_stylus(app: ConsoleApp):
+    for _ in range(25):
+        app.advance()
+    app.set_walking("shared")
+    app.teleop.set_stylus("front_left", np.array([0.0, 0.0, 0.06]))  # thorax z: forward
+    state = app.teleop.legs["front_left"]
+    target = app.walking.footholds_from_targets({"front_left": state.target})["front_left"]
+    crawl = app.walking.crawl
+    leg = list(app.simulation.robot.legs).index("front_left")
+    start = crawl.footholds[leg].copy()
+    for _ in range(250):  # rear_left stays (its front foot has not moved), front_left steps
+        app.advance()
+        if crawl.steps_taken >= 1:
+            break
+    # the body shifts before the swing, the stylus target moves with it (body frame)
+    assert crawl.footholds[leg] == pytest.approx(target, abs=0.06)
+    assert crawl.steps_taken == 1 and crawl.footholds[leg][0] > start[0] + 0.01
+
+
+def test_keys_change_the_walking_command():
+    import math
+
+    from pneumaquad.console.keyboard import KeyboardControl, key_command
+
+    mode, speed, heading = key_command("m", "off", 0.0, 0.0)
+    assert mode == "automatic"
+    mode, speed, heading = key_command("w", mode, speed, heading)
+    mode, speed, heading = key_command("w", mode, speed, heading)
+    assert speed == pytest.approx(0.01)
+    mode, speed, heading = key_command("a", mode, speed, heading)
+    assert math.degrees(heading) == pytest.approx(15.0)
+    assert key_command(" ", mode, speed, heading)[1] == 0.0
+    for _ in range(30):
+        speed = key_command("w", mode, speed, heading)[1]
+    assert speed == pytest.approx(0.05)  # capped
+    with open("/dev/null") as not_a_terminal:
+        assert not KeyboardControl(lambda: (mode, speed, heading), lambda *_: None,
+                                   stream=not_a_terminal).active
