@@ -211,13 +211,16 @@ def robot_stand(
 @robot_app.command("walk")
 def robot_walk(
     distance: Annotated[float, typer.Option(min=0.01, help="Distance to walk [m].")] = 1.0,
-    speed: Annotated[float, typer.Option(min=0.001, help="Body speed [m/s].")] = 0.03,
+    speed: Annotated[float, typer.Option(min=0.001, help="Body speed [m/s].")] = 0.02,
     heading: Annotated[float, typer.Option(help="Walking direction, CCW from forward [deg].")]
     = 0.0,
     duty_factor: Annotated[float, typer.Option(min=0.75, max=0.99, help="Stance fraction.")]
-    = 0.8,
-    period: Annotated[float, typer.Option(min=0.5, help="Gait cycle [s].")] = 4.0,
+    = 0.9,
+    period: Annotated[float, typer.Option(min=0.5, help="Gait cycle [s].")] = 8.0,
     margin: Annotated[float, typer.Option(min=0.0, help="Planned static margin [m].")] = 0.04,
+    stance_control: Annotated[bool, typer.Option(
+        "--stance-control/--no-stance-control",
+        help="Load sharing and levelling of the stance feet (robot.stance_control).")] = False,
     environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
     seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
     params: RobotParamsOption = "crr-quadruped",
@@ -230,34 +233,46 @@ def robot_walk(
     import json
     import math
 
+    from pneumaquad.robot.stance_control import StanceControlGains
     from pneumaquad.robot.walking import WalkSettings, walking_outcome, walking_phases
 
     _check_environment(environment)
     settings = WalkSettings(speed=speed, heading=math.radians(heading),
                             duty_factor=duty_factor, period=period, minimum_margin=margin,
-                            distance=distance)
+                            distance=distance,
+                            stance_control=StanceControlGains() if stance_control else None)
     simulation = _simulation(params, overrides, "quadruped", environment, seed)
     phases, plan = walking_phases(simulation, settings)
     folder = _run(simulation, phases, output, f"walk-{environment}",
                   f"quadruped: walk {distance:g} m on {environment}", video)
     from pneumaquad.recording import read_recording
+    from pneumaquad.robot.plots import plot_walking
+    from pneumaquad.robot.walking import tip_over_series
 
     summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-    outcome = walking_outcome(read_recording(folder), summary, settings, simulation.robot)
+    recording = read_recording(folder)
+    if "walk" not in summary["phases"]:
+        console.print("walking: not judged (the run stopped before the walk began)")
+        return
+    outcome = walking_outcome(recording, summary, settings, simulation.robot, plan)
+    plot_walking(recording, simulation.robot.legs, folder / "walking.png",
+                 tip_over_series(recording, summary, simulation.robot, plan),
+                 f"walk {distance:g} m on {environment}")
     outcome["planned smallest static margin [m]"] = float(plan.margins.min())
     outcome["planned unreachable IK samples [count]"] = int(
-        sum(plan.cycle.unreachable_counts.values())
-        if isinstance(plan.cycle.unreachable_counts, dict)
-        else np.sum(plan.cycle.unreachable_counts)
-    )
+        sum(plan.cycle.unreachable_counts.values()))
     summary["walking"] = outcome
     (folder / "summary.json").write_text(json.dumps(summary, indent=2, default=str),
                                          encoding="utf-8")
     verdict = "success" if outcome["success"] else "failure"
     console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
                   f"travelled {outcome['distance travelled [m]']:.3f} m of {distance:g} m, "
-                  f"air {outcome['air per metre [NL/m]']:.3g} NL/m, smallest margin "
-                  f"{outcome['smallest static margin [m]'] * 1000:.0f} mm")
+                  f"air {outcome['air per metre [NL/m]']:.3g} NL/m; negative static margin "
+                  f"{outcome['time with negative static margin [%]']:.0f} % of the time "
+                  f"(loaded feet), tip-over margin "
+                  f"{outcome['time with negative tip-over margin [%]']:.1f} % (median "
+                  f"{outcome['median tip-over margin [m]'] * 1000:.0f} mm); stance feet slid "
+                  f"{outcome['largest stance-foot slide [m]']:.2f} m")
 
 
 @robot_app.command("export")

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
@@ -20,8 +21,10 @@ def test_one_gait_cycle_moves_the_robot_forward_without_a_fall(tmp_path: Path) -
     phases, plan = walking_phases(sim, settings)
     assert plan.margins.min() >= 0.04 - 1e-9  # the plan keeps the requested margin
     run = run_phases(sim, phases, tmp_path, "walk")
-    outcome = walking_outcome(run.recording, run.summary, settings, sim.robot)
+    outcome = walking_outcome(run.recording, run.summary, settings, sim.robot, plan)
     assert not outcome["fell"]
+    # the centre of mass stays over the feet the gait holds down (statically stable gait)
+    assert outcome["time with negative tip-over margin [%]"] < 5.0
     assert outcome["distance travelled [m]"] > 0.05  # measured 0.1-0.2 m for 0.1 m planned
     assert outcome["sideways drift [m]"] < 0.1
     assert set(outcome["reasons"]) <= {"reached the distance", "margin violation", "slip",
@@ -34,3 +37,22 @@ def test_one_gait_cycle_moves_the_robot_forward_without_a_fall(tmp_path: Path) -
     )
     # standing on four feet before the walk: the centre of mass well inside the support
     assert np.all(margin[holding] > 0.15)
+
+
+def test_stance_control_closes_its_loop_every_chunk(tmp_path: Path) -> None:
+    from pneumaquad.robot.stance_control import StanceControlGains, StanceController
+
+    sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    gains = StanceControlGains()
+    settings = WalkSettings(period=4.0, distance=0.05, stance_control=gains)
+    phases, _ = walking_phases(sim, settings)
+    walk = next(phase for phase in phases if phase.name == "walk")
+    assert walk.feedback and isinstance(walk.references, StanceController)
+    run_phases(sim, phases, tmp_path, "walk")
+    log = np.array(walk.references.log)
+    every = sim.robot.parameters.simulation.recording_every
+    assert len(log) == round(walk.duration / (every * sim.control_step))  # once per chunk
+    desired, offsets = log[:, 5:9], log[:, 9:13]
+    measured_total = log[:, 1:5].sum(axis=1)
+    assert desired.sum(axis=1) == pytest.approx(measured_total, rel=1e-9, abs=1e-9)
+    assert np.all(np.abs(offsets) <= gains.offset_limit + 1e-12)

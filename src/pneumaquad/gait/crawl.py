@@ -53,6 +53,7 @@ __all__ = [
 Array = NDArray[np.float64]
 #: Leg order of every (..., 4, ...) array here (that of ``RobotModel.legs``).
 LEGS = ("front_left", "front_right", "rear_left", "rear_right")
+_PHASE_TOLERANCE = 1e-9  # [cycle fraction] rounding of the phase at a touchdown
 #: Swing order of the forward wave gait (McGhee & Frank's lateral sequence).
 LATERAL_SEQUENCE = ("rear_left", "front_left", "rear_right", "front_right")
 
@@ -149,7 +150,9 @@ def leg_phases(gait: CrawlGait, times: ArrayLike) -> Array:
 
 def stance_flags(gait: CrawlGait, times: ArrayLike) -> NDArray[np.bool_]:
     """True (n, 4) where a leg is in stance (a touching-down foot counts as stance)."""
-    return leg_phases(gait, times) >= 1.0 - gait.duty_factor
+    # a touchdown exactly at another leg's lift-off must not leave both in the air
+    # because of rounding in the phase (e.g. t / T = 9.2 → 0.19999…)
+    return leg_phases(gait, times) >= 1.0 - gait.duty_factor - _PHASE_TOLERANCE
 
 
 def foot_positions_ground(gait: CrawlGait, times: ArrayLike) -> Array:

@@ -10,7 +10,7 @@ import numpy as np
 
 from pneumaquad.plotting import DPI, pascals_to_psi, plt
 
-__all__ = ["plot_body", "plot_joints"]
+__all__ = ["plot_body", "plot_joints", "plot_walking"]
 
 
 def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: Path,
@@ -60,6 +60,33 @@ def plot_body(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
     axes[3].plot(time, recording["air consumed [NL]"], "C4")
     axes[3].set_ylabel("Air consumed (NL)")
     axes[3].set_xlabel("Time (s)")
+    return _save(fig, axes, path, title)
+
+
+def plot_walking(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
+                 tip_over: np.ndarray | None = None, title: str = "") -> Path:
+    """Walking: thorax travel [m], static margins [mm] over time, foot heights [mm].
+
+    ``tip_over`` (same length as the recording, NaN outside the walk) is the margin in the
+    support of the feet the gait holds down; the recorded margin uses the loaded feet.
+    """
+    time = recording["time [s]"]
+    fig, axes = plt.subplots(3, 1, figsize=(8.0, 7.5), sharex=True)
+    axes[0].plot(time, recording["thorax x [m]"], "C0", label="x")
+    axes[0].plot(time, recording["thorax y [m]"], "C1", label="y")
+    axes[0].set_ylabel("Thorax (m)")
+    margin = 1000.0 * recording["stability margin [m]"]
+    axes[1].plot(time, margin, "C3", lw=0.8, label="loaded feet (> 1 N)")
+    if tip_over is not None:
+        axes[1].plot(time, 1000.0 * tip_over, "C2", lw=1.2, label="feet the gait holds down")
+    axes[1].axhline(0.0, color="k", lw=0.8)
+    axes[1].set_ylim(max(-200.0, float(np.nanmin(margin, initial=0.0))) - 10.0, 150.0)
+    axes[1].set_ylabel("Static margin (mm)")
+    for leg in legs:
+        axes[2].plot(time, 1000.0 * recording[f"{leg} foot z [m]"], lw=1.0,
+                     label=leg.replace("_", " "))
+    axes[2].set_ylabel("Foot height (mm)")
+    axes[2].set_xlabel("Time (s)")
     return _save(fig, axes, path, title)
 
 

@@ -10,12 +10,12 @@ went, whether it fell, slipped, hit a joint limit, or lost static stability.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from pneumaquad.gait.stability import STANCE_FORCE
+from pneumaquad.gait.stability import STANCE_FORCE, stability_margin, support_polygon
 from pneumaquad.gait.walk import WalkPlan, plan_walk, robot_gait
 
 from .builder import RobotModel
@@ -24,8 +24,8 @@ from .scenarios import stand_up_phases
 from .simulation import RobotSimulation
 from .stance_control import StanceControlGains, StanceController
 
-__all__ = ["WALKING_ANGLES", "WalkSettings", "contact_slide", "walking_outcome",
-           "walking_phases"]
+__all__ = ["WALKING_ANGLES", "WalkSettings", "contact_slide", "gait_support_margins",
+           "tip_over_series", "walking_outcome", "walking_phases"]
 
 #: Alpha, beta, gamma [rad] the gait is planned about: every IK sample stays reachable
 #: (the standing gamma of 90° is too close to its 95° limit to lift and sway).
@@ -37,17 +37,18 @@ class WalkSettings:
     """Gait settings: speed [m/s], heading [rad], duty factor, period [s], step height
     [m], planned minimum static margin [m], distance to walk [m], the swing's share of
     pure lift and lowering (:class:`pneumaquad.gait.crawl.CrawlGait`), and the stance
-    control gains (None: play the planned joint angles open-loop in the body height)."""
+    control gains (None: play the planned joint angles as they are). Defaults: the
+    slow, long-cycle gait that rocked least in our measurements (docs/robot.md)."""
 
-    speed: float = 0.03
+    speed: float = 0.02
     heading: float = 0.0
-    duty_factor: float = 0.8
-    period: float = 4.0
+    duty_factor: float = 0.9
+    period: float = 8.0
     step_height: float = 0.04
     minimum_margin: float = 0.04
     distance: float = 1.0
     lift_fraction: float = 0.0
-    stance_control: StanceControlGains | None = field(default_factory=StanceControlGains)
+    stance_control: StanceControlGains | None = None
 
     def duration(self) -> float:
         """Walking time [s] for the distance, in whole gait cycles."""
@@ -122,9 +123,39 @@ def contact_slide(foot_xy: np.ndarray, loaded: np.ndarray) -> float:
     return total
 
 
+def gait_support_margins(recording: dict[str, np.ndarray], legs: tuple[str, ...],
+                         stance: np.ndarray) -> np.ndarray:
+    """Static margin [m] of the measured centre of mass in the support polygon of the feet
+    the gait holds on the ground (``stance`` (n, legs) bool per recorded sample), at their
+    measured positions, whether or not they carry load: the tip-over margin of the gait.
+    """
+    feet = np.stack([np.column_stack([recording[f"{leg} foot x [m]"],
+                                      recording[f"{leg} foot y [m]"]]) for leg in legs], axis=1)
+    com = np.column_stack([recording["centre of mass x [m]"], recording["centre of mass y [m]"]])
+    return np.array([
+        stability_margin(com[i], support_polygon(feet[i][stance[i]])) if stance[i].any()
+        else np.nan for i in range(len(com))
+    ])
+
+
+def tip_over_series(recording: dict[str, np.ndarray], summary: dict[str, Any],
+                    robot: RobotModel, plan: WalkPlan) -> np.ndarray:
+    """:func:`gait_support_margins` for every recorded sample (NaN outside the walk)."""
+    times = recording["time [s]"]
+    start = summary["phases"]["walk"]["start [s]"]
+    walking = (times >= start) & (times <= start + summary["phases"]["walk"]["duration [s]"])
+    step = float(plan.times[1] - plan.times[0]) if plan.times.size > 1 else 1.0
+    index = np.clip(np.round((times[walking] - start) / step).astype(int), 0,
+                    len(plan.stance) - 1)
+    series = np.full(times.shape, np.nan)
+    series[walking] = gait_support_margins({k: v[walking] for k, v in recording.items()},
+                                           tuple(robot.legs), plan.stance[index])
+    return series
+
+
 def walking_outcome(
     recording: dict[str, np.ndarray], summary: dict[str, Any], settings: WalkSettings,
-    robot: RobotModel,
+    robot: RobotModel, plan: WalkPlan | None = None,
 ) -> dict[str, Any]:
     """Success or failure of a walking run, with the reason.
 
@@ -137,6 +168,12 @@ def walking_outcome(
     within 0.5° of a limit for more than 20 % of the walk; the run succeeds when none of
     these happened and the thorax travelled at least 90 % of the distance along the
     heading (else **too slow**).
+
+    With the ``plan``, the tip-over margin (:func:`gait_support_margins`: the feet the
+    gait holds down, loaded or not) is reported beside the loaded-feet margin: a robot
+    rocking on a diagonal pair of feet has a negative loaded-feet margin while its
+    tip-over margin stays positive (the rocking is bounded by the unloaded feet, a few
+    millimetres above the ground).
     """
     times = recording["time [s]"]
     start = summary["phases"]["walk"]["start [s]"]
@@ -178,6 +215,13 @@ def walking_outcome(
             at_limit.append(name)
     if at_limit:
         reasons.append("joint limit")
+    if plan is not None:
+        tip = tip_over_series(recording, summary, robot, plan)[walking]
+        tip_over = {"time with negative tip-over margin [%]": 100.0 * float(np.mean(tip < 0.0)),
+                    "smallest tip-over margin [m]": float(np.nanmin(tip)),
+                    "median tip-over margin [m]": float(np.nanmedian(tip))}
+    else:
+        tip_over = {}
     air = summary["phases"]["walk"]["air consumed [NL]"]
     outcome = {
         "distance travelled [m]": travelled,
@@ -186,6 +230,7 @@ def walking_outcome(
         "fell": fallen,
         "time with negative static margin [%]": 100.0 * violated,
         "smallest static margin [m]": float(np.nanmin(margin)) if margin.size else math.nan,
+        **tip_over,
         "largest stance-foot slide [m]": slip,
         "largest loaded-foot path [m]": path,
         "joints at a limit": at_limit,
