@@ -128,13 +128,13 @@ class HtmlPage:
         self.blocks.append(table_html(headers, rows, digits))
 
     def figure(self, png: Path | bytes, caption: str = "") -> None:
-        """Embed a PNG (file path or bytes) as a base64 data URI, with a caption."""
+        """Embed a PNG or GIF (file path or bytes) as a base64 data URI, with a caption."""
         data = Path(png).read_bytes() if isinstance(png, Path) else png
         alt = escape(caption or "figure")
         caption_html = f"<figcaption>{escape(caption)}</figcaption>" if caption else ""
-        self.blocks.append(
-            f"<figure><img alt='{alt}' src='{png_data_uri(data)}'>{caption_html}</figure>"
-        )
+        uri = (png_data_uri(data) if not data.startswith(b"GIF8")
+               else "data:image/gif;base64," + base64.b64encode(data).decode("ascii"))
+        self.blocks.append(f"<figure><img alt='{alt}' src='{uri}'>{caption_html}</figure>")
 
     def render(self) -> str:
         """The whole page as HTML text."""

@@ -35,6 +35,7 @@ __all__ = [
     "add_parameters",
     "add_summary",
     "add_time_histories",
+    "add_walking",
     "commanded_joints",
     "velocity_limit",
 ]
@@ -130,9 +131,34 @@ def add_time_histories(page: HtmlPage, run: RunFolder, folder: Path) -> None:
     if run.summary.get("configuration") != "fixed" and "thorax z [m]" in recording and feet:
         path = plot_body(recording, feet, folder / "body.png", run.description)
         page.figure(path, "Thorax height, attitude, foot normal forces and air consumed.")
+    add_walking(page, run)
+    preview = run.path / "video.gif"
     snapshot = run.path / "first-frame.png"
-    if snapshot.is_file():
+    if preview.is_file() and preview.stat().st_size <= MAX_EMBEDDED_GIF:
+        page.figure(preview, "The run's video (GIF preview; video.mp4 in the run folder).")
+    elif snapshot.is_file():
         page.figure(snapshot, "First frame of the run's video.")
+
+
+#: Largest GIF preview [bytes] embedded in a report (larger ones: the first frame).
+MAX_EMBEDDED_GIF = 12 * 1024 * 1024
+
+
+def add_walking(page: HtmlPage, run: RunFolder) -> None:
+    """The walking judgement of a ``robot walk`` run (summary "walking") and walking.png."""
+    outcome = run.summary.get("walking")
+    if not outcome:
+        return
+    page.heading("Walking", level=3)
+    verdict = "success" if outcome.get("success") else "failure"
+    page.paragraph(f"Outcome: {verdict} ({', '.join(outcome.get('reasons', []))}).")
+    page.table(["quantity", "value"],
+               [(key, value if not isinstance(value, list) else ", ".join(value) or "none")
+                for key, value in outcome.items() if key not in ("success", "reasons")])
+    figure = run.path / "walking.png"
+    if figure.is_file():
+        page.figure(figure, "Thorax travel, static margin of the loaded feet and of the feet "
+                            "the gait holds down (tip-over margin), foot heights.")
 
 
 def velocity_limit(run: RunFolder, default: float = 0.3) -> float:

@@ -42,6 +42,7 @@ if TYPE_CHECKING:
 MODEL_NAME, TRAJECTORY_NAME = "model.xml", "trajectory.npz"
 MP4_NAME, GIF_NAME, FIRST_FRAME_NAME = "video.mp4", "video.gif", "first-frame.png"
 GIF_FPS, GIF_MAX_WIDTH = 10.0, 320
+GIF_MAX_FRAMES = 300  # a 320 px preview of about 10 MB at most
 _BACKENDS = ("egl", "osmesa")
 _SYSTEM_PACKAGES = {"egl": "libegl1 libgl1-mesa-dri libgbm1", "osmesa": "libosmesa6"}
 _FFMPEG_OPTIONS = dict(codec="libx264", pixelformat="yuv420p", macro_block_size=1)
@@ -279,8 +280,13 @@ def write_video(frames: Iterable[np.ndarray], path: Path, fps: float) -> int:
     return count
 
 
-def _gif_step(fps: float) -> int:
-    return max(1, round(fps / GIF_FPS))
+def _gif_step(fps: float, duration: float | None = None) -> int:
+    """Frames per GIF frame: about 10 GIF frames per second of run, fewer for runs longer
+    than :data:`GIF_MAX_FRAMES` / 10 s (the preview then plays as a time lapse)."""
+    step = max(1, round(fps / GIF_FPS))
+    if duration is not None:
+        step = max(step, math.ceil(duration * fps / GIF_MAX_FRAMES))
+    return step
 
 
 def _downscale(frame: np.ndarray, max_width: int) -> np.ndarray:
@@ -378,7 +384,8 @@ def render_run_video(
     fps, width, height
         Video frame rate [1/s] and frame size [px].
     gif
-        Also write the GIF preview.
+        Also write the GIF preview (about 10 frames per second of run; runs longer than
+        30 s become a time lapse of :data:`GIF_MAX_FRAMES` frames).
     max_seconds
         Render only the first ``max_seconds`` of the trajectory.
 
@@ -404,7 +411,7 @@ def render_run_video(
     gif_path = folder / GIF_NAME if gif else None
     files = VideoFiles(folder / MP4_NAME, gif_path, folder / FIRST_FRAME_NAME)
     gif_frames: list[np.ndarray] = []
-    step = _gif_step(fps)
+    step = _gif_step(fps, float(times[-1] - times[0]) if len(times) else None)
 
     def tap(frames: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
         for index, frame in enumerate(frames):
