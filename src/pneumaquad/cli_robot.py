@@ -218,6 +218,8 @@ def robot_walk(
     = 0.9,
     period: Annotated[float, typer.Option(min=0.5, help="Gait cycle [s].")] = 8.0,
     margin: Annotated[float, typer.Option(min=0.0, help="Planned static margin [m].")] = 0.04,
+    step_height: Annotated[float, typer.Option(min=0.0, help="Foot lift at mid-swing [m].")]
+    = 0.04,
     stance_control: Annotated[bool, typer.Option(
         "--stance-control/--no-stance-control",
         help="Load sharing and levelling of the stance feet (robot.stance_control).")] = False,
@@ -239,7 +241,7 @@ def robot_walk(
     _check_environment(environment)
     settings = WalkSettings(speed=speed, heading=math.radians(heading),
                             duty_factor=duty_factor, period=period, minimum_margin=margin,
-                            distance=distance,
+                            distance=distance, step_height=step_height,
                             stance_control=StanceControlGains() if stance_control else None)
     simulation = _simulation(params, overrides, "quadruped", environment, seed)
     phases, plan = walking_phases(simulation, settings)

@@ -167,7 +167,8 @@ def walking_outcome(
     contact jitter, is reported beside it); **joint limit** — a joint
     within 0.5° of a limit for more than 20 % of the walk; the run succeeds when none of
     these happened and the thorax travelled at least 90 % of the distance along the
-    heading (else **too slow**).
+    heading (**too slow** otherwise, listed with the other reasons: a robot stalled at an
+    obstacle is too slow whatever else happened).
 
     With the ``plan``, the tip-over margin (:func:`gait_support_margins`: the feet the
     gait holds down, loaded or not) is reported beside the loaded-feet margin: a robot
@@ -236,7 +237,7 @@ def walking_outcome(
         "joints at a limit": at_limit,
         "air per metre [NL/m]": air / travelled if travelled > 0 else math.nan,
     }
-    if travelled < 0.9 * settings.distance and not reasons:
+    if travelled < 0.9 * settings.distance:
         reasons.append("too slow")
     outcome["success"] = not reasons
     outcome["reasons"] = reasons or ["reached the distance"]
