@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import shutil
+import time
 from pathlib import Path
 
 import numpy as np
@@ -45,9 +48,17 @@ def test_page_shows_the_robot_and_the_controls(tmp_path: Path) -> None:
                 page = browser.new_page(viewport={"width": 1400, "height": 900})
                 page.goto(f"http://127.0.0.1:{app.port}/", timeout=30_000)
                 page.wait_for_selector("canvas", timeout=30_000)
-                for label in ("Start", "Pause", "Reset", "Configuration", "Supply [kPa g]"):
+                for label in ("Start", "Pause", "Reset", "Configuration", "Supply [kPa g]",
+                              "Walking mode", "Stop walking"):
                     page.get_by_text(label, exact=True).first.wait_for(timeout=30_000)
                 page.get_by_text("clamped", exact=True).first.wait_for(timeout=30_000)
+                # a control clicked in the browser changes the simulation
+                before = app.simulation.time
+                page.get_by_text("Step 20 ms", exact=True).first.click()
+                deadline = time.monotonic() + 20.0
+                while app.simulation.time <= before and time.monotonic() < deadline:
+                    page.wait_for_timeout(100)
+                stepped = app.simulation.time - before
                 page.wait_for_timeout(3000)  # let the software renderer draw the scene
                 screenshot = tmp_path / "console.png"
                 page.screenshot(path=str(screenshot))
@@ -55,5 +66,9 @@ def test_page_shows_the_robot_and_the_controls(tmp_path: Path) -> None:
                 browser.close()
     finally:
         app.close()
+    assert stepped == pytest.approx(app.chunk_steps * app.simulation.control_step)
     assert screenshot.stat().st_size > 20_000
+    keep = os.environ.get("PNEUMAQUAD_SCREENSHOT")
+    if keep:  # e.g. docs/images/console.png
+        shutil.copyfile(screenshot, keep)
     print(f"screenshot: {screenshot}")
