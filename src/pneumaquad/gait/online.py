@@ -57,7 +57,8 @@ class OnlineCrawlSettings:
     max_step : float [m]
         Longest foot step on the ground (footholds farther away are shortened).
     idle_distance : float [m]
-        With no velocity, a foot within this distance of its target does not step.
+        With no velocity (automatic) or in shared control, a foot within this distance
+        of its target does not step.
     """
 
     shift_time: float = 1.0
@@ -232,11 +233,8 @@ class OnlineCrawl:
             self.clock = 0.0
             k = LEGS.index(self.leg)
             target = self._target_foothold(self.leg)
-            idle = (not np.any(self.velocity) and not self.shared
-                    and np.linalg.norm(target - self.footholds[k]) < s.idle_distance)
-            if self.shared and np.linalg.norm(target - self.footholds[k]) < s.idle_distance:
-                idle = True
-            if idle:
+            standing = self.shared or not np.any(self.velocity)
+            if standing and np.linalg.norm(target - self.footholds[k]) < s.idle_distance:
                 self._next_leg()
                 return
             if self.planned_margin < s.minimum_margin or not lift_allowed:
