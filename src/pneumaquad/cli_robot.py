@@ -223,6 +223,10 @@ def robot_walk(
     stance_control: Annotated[bool, typer.Option(
         "--stance-control/--no-stance-control",
         help="Load sharing and levelling of the stance feet (robot.stance_control).")] = False,
+    swing_from_ground: Annotated[bool, typer.Option(
+        "--swing-from-ground/--swing-from-body",
+        help="Swing height above the ground at lift-off (robot.swing_control), or "
+             "relative to the body as planned.")] = True,
     environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
     seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
     params: RobotParamsOption = "crr-quadruped",
@@ -242,6 +246,7 @@ def robot_walk(
     settings = WalkSettings(speed=speed, heading=math.radians(heading),
                             duty_factor=duty_factor, period=period, minimum_margin=margin,
                             distance=distance, step_height=step_height,
+                            swing_from_ground=swing_from_ground,
                             stance_control=StanceControlGains() if stance_control else None)
     simulation = _simulation(params, overrides, "quadruped", environment, seed)
     phases, plan = walking_phases(simulation, settings)

@@ -8,11 +8,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pneumaquad.gait.walk import robot_gait
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.experiment import run_phases
 from pneumaquad.robot.simulation import RobotSimulation
-from pneumaquad.robot.walking import WalkSettings, walking_outcome, walking_phases
+from pneumaquad.robot.walking import (
+    WALKING_ANGLES,
+    WalkSettings,
+    walking_outcome,
+    walking_phases,
+)
 
 
 def test_one_gait_cycle_moves_the_robot_forward_without_a_fall(tmp_path: Path) -> None:
@@ -47,12 +53,41 @@ def test_stance_control_closes_its_loop_every_chunk(tmp_path: Path) -> None:
     settings = WalkSettings(period=4.0, distance=0.05, stance_control=gains)
     phases, _ = walking_phases(sim, settings)
     walk = next(phase for phase in phases if phase.name == "walk")
-    assert walk.feedback and isinstance(walk.references, StanceController)
+    controller = walk.references.references  # inside the swing-height correction
+    assert walk.feedback and isinstance(controller, StanceController)
     run_phases(sim, phases, tmp_path, "walk")
-    log = np.array(walk.references.log)
+    log = np.array(controller.log)
     every = sim.robot.parameters.simulation.recording_every
     assert len(log) == round(walk.duration / (every * sim.control_step))  # once per chunk
     desired, offsets = log[:, 5:9], log[:, 9:13]
     measured_total = log[:, 1:5].sum(axis=1)
     assert desired.sum(axis=1) == pytest.approx(measured_total, rel=1e-9, abs=1e-9)
     assert np.all(np.abs(offsets) <= gains.offset_limit + 1e-12)
+
+
+def _swing_heights(tmp_path: Path, swing_from_ground: bool) -> np.ndarray:
+    """Highest foot [m] of each leg (LEGS order) during its swings in one 8 s cycle."""
+    from pneumaquad.gait.crawl import LEGS, stance_flags
+
+    sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    settings = WalkSettings(distance=0.1, swing_from_ground=swing_from_ground)
+    phases, plan = walking_phases(sim, settings)
+    run = run_phases(sim, phases, tmp_path / str(swing_from_ground), "walk")
+    times = run.recording["time [s]"]
+    start = run.summary["phases"]["walk"]["start [s]"]
+    walking = (times >= start) & (times < start + plan.times[-1])
+    gait = robot_gait(sim.robot, settings.speed, 0.0, settings.duty_factor, settings.period,
+                      settings.step_height, angles=WALKING_ANGLES,
+                      minimum_margin=settings.minimum_margin)
+    stance = stance_flags(gait, times[walking] - start)
+    return np.array([run.recording[f"{leg} foot z [m]"][walking][~stance[:, k]].max()
+                     for k, leg in enumerate(LEGS)])
+
+
+def test_swing_height_from_the_ground_lifts_the_feet_higher(tmp_path: Path) -> None:
+    # The body sags on the corner of a lifted leg, eating the planned 40 mm lift; taking
+    # the swing height from the ground gives it back.
+    body_relative = _swing_heights(tmp_path, swing_from_ground=False)
+    from_ground = _swing_heights(tmp_path, swing_from_ground=True)
+    assert from_ground.mean() > body_relative.mean() + 0.01
+    assert from_ground.min() > 0.5 * 0.04  # measured 27-35 mm; body-relative 10-36 mm

@@ -23,6 +23,7 @@ from .experiment import Phase
 from .scenarios import stand_up_phases
 from .simulation import RobotSimulation
 from .stance_control import StanceControlGains, StanceController
+from .swing_control import SwingHeightCorrection
 
 __all__ = ["WALKING_ANGLES", "WalkSettings", "contact_slide", "gait_support_margins",
            "tip_over_series", "walking_outcome", "walking_phases"]
@@ -49,6 +50,7 @@ class WalkSettings:
     distance: float = 1.0
     lift_fraction: float = 0.0
     stance_control: StanceControlGains | None = None
+    swing_from_ground: bool = True
 
     def duration(self) -> float:
         """Walking time [s] for the distance, in whole gait cycles."""
@@ -93,12 +95,14 @@ def walking_phases(
                         len(plan.references) - 1)
         return plan.references[index]
 
-    if settings.stance_control is None:
-        walking = Phase("walk", duration, walk, closed)
-    else:
-        controller = StanceController(simulation, gait, plan, walk_start,
+    references = walk
+    if settings.stance_control is not None:
+        references = StanceController(simulation, gait, plan, walk_start,
                                       settings.stance_control)
-        walking = Phase("walk", duration, controller, closed, feedback=True)
+    if settings.swing_from_ground:
+        references = SwingHeightCorrection(simulation, gait, walk_start, references)
+    feedback = settings.stance_control is not None or settings.swing_from_ground
+    walking = Phase("walk", duration, references, closed, feedback=feedback)
     phases += [
         Phase("to walking pose", 2.0, to_walking_pose, closed),
         walking,
