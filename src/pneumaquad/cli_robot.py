@@ -227,6 +227,9 @@ def robot_walk(
         "--swing-from-ground/--swing-from-body",
         help="Swing height above the ground at lift-off (robot.swing_control), or "
              "relative to the body as planned.")] = True,
+    heading_hold: Annotated[bool, typer.Option(
+        "--heading-hold/--no-heading-hold",
+        help="Hold the initial heading (robot.heading_control).")] = True,
     environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
     seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
     params: RobotParamsOption = "crr-quadruped",
@@ -247,6 +250,7 @@ def robot_walk(
                             duty_factor=duty_factor, period=period, minimum_margin=margin,
                             distance=distance, step_height=step_height,
                             swing_from_ground=swing_from_ground,
+                            heading_hold=heading_hold,
                             stance_control=StanceControlGains() if stance_control else None)
     simulation = _simulation(params, overrides, "quadruped", environment, seed)
     phases, plan = walking_phases(simulation, settings)

@@ -91,3 +91,24 @@ def test_swing_height_from_the_ground_lifts_the_feet_higher(tmp_path: Path) -> N
     from_ground = _swing_heights(tmp_path, swing_from_ground=True)
     assert from_ground.mean() > body_relative.mean() + 0.01
     assert from_ground.min() > 0.5 * 0.04  # measured 27-35 mm; body-relative 10-36 mm
+
+
+def test_heading_hold_turns_the_standing_body_towards_the_heading() -> None:
+    # Stance feet held by the ground, commanded rotated by +c: the body turns by -c.
+    from pneumaquad.console.app import initial_pose
+    from pneumaquad.robot.heading_control import HeadingHold
+    from pneumaquad.robot.recording import thorax_attitude
+
+    sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    standing = initial_pose(sim)
+    sim.step(1000)
+    start = float(thorax_attitude(sim)[2])
+    hold = HeadingHold(sim, lambda times: np.tile(standing, (len(times), 1)), gain=2.0)
+    hold.heading = start + 0.05  # pretend the body has turned 0.05 rad clockwise
+    chunk = 10
+    for _ in range(300):  # 3 s
+        times = sim.time + sim.control_step * np.arange(1, chunk + 1)
+        sim.step(chunk, np.ascontiguousarray(hold(times)), 0)
+    turned = float(thorax_attitude(sim)[2]) - start
+    assert hold.rotation < 0.0  # feet turned clockwise ...
+    assert 0.02 < turned < 0.1  # ... the body counter-clockwise (measured 0.069 rad)

@@ -20,6 +20,7 @@ from pneumaquad.gait.walk import WalkPlan, plan_walk, robot_gait
 
 from .builder import RobotModel
 from .experiment import Phase
+from .heading_control import HeadingHold
 from .scenarios import stand_up_phases
 from .simulation import RobotSimulation
 from .stance_control import StanceControlGains, StanceController
@@ -51,6 +52,7 @@ class WalkSettings:
     lift_fraction: float = 0.0
     stance_control: StanceControlGains | None = None
     swing_from_ground: bool = True
+    heading_hold: bool = True
 
     def duration(self) -> float:
         """Walking time [s] for the distance, in whole gait cycles."""
@@ -101,7 +103,10 @@ def walking_phases(
                                       settings.stance_control)
     if settings.swing_from_ground:
         references = SwingHeightCorrection(simulation, gait, walk_start, references)
-    feedback = settings.stance_control is not None or settings.swing_from_ground
+    if settings.heading_hold:
+        references = HeadingHold(simulation, references)
+    feedback = (settings.stance_control is not None or settings.swing_from_ground
+                or settings.heading_hold)
     walking = Phase("walk", duration, references, closed, feedback=feedback)
     phases += [
         Phase("to walking pose", 2.0, to_walking_pose, closed),
