@@ -53,7 +53,9 @@ def test_stance_control_closes_its_loop_every_chunk(tmp_path: Path) -> None:
     settings = WalkSettings(period=4.0, distance=0.05, stance_control=gains)
     phases, _ = walking_phases(sim, settings)
     walk = next(phase for phase in phases if phase.name == "walk")
-    controller = walk.references.references  # inside the swing-height correction
+    controller = walk.references
+    while not isinstance(controller, StanceController):  # inside the other corrections
+        controller = controller.references
     assert walk.feedback and isinstance(controller, StanceController)
     run_phases(sim, phases, tmp_path, "walk")
     log = np.array(controller.log)
@@ -70,7 +72,8 @@ def _swing_heights(tmp_path: Path, swing_from_ground: bool) -> np.ndarray:
     from pneumaquad.gait.crawl import LEGS, stance_flags
 
     sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
-    settings = WalkSettings(distance=0.1, swing_from_ground=swing_from_ground)
+    settings = WalkSettings(distance=0.1, swing_from_ground=swing_from_ground,
+                            heading_hold=False)  # the swing correction alone
     phases, plan = walking_phases(sim, settings)
     run = run_phases(sim, phases, tmp_path / str(swing_from_ground), "walk")
     times = run.recording["time [s]"]
