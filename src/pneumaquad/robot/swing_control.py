@@ -8,8 +8,10 @@ raised cell. :class:`SwingHeightCorrection` closes that loop once per control ch
 swing foot's height target is taken in the world — its height at lift-off plus the
 planned lift — and the joint references of the swinging leg are corrected, through the
 leg Jacobian, by the difference between that target and where the planned foot would be
-with the body as measured (thorax position and attitude). After touchdown the correction
-fades out with a time constant, so the stance leg's reference does not jump.
+with the body as measured (thorax position and attitude), weighted by the planned lift
+(0 at lift-off and touchdown, 1 at mid-swing): the foot lands where the plan puts it and
+the stance leg's reference does not jump. What remains of a correction at touchdown fades
+out with a time constant.
 """
 
 from __future__ import annotations
@@ -94,7 +96,11 @@ class SwingHeightCorrection:
                 foot = forward_kinematics_dh(table, angles)  # thorax frame
                 height = thorax_height + float(thorax_rotation[2] @ foot)
                 target = self.lift_off_height[leg] + lift[leg]
-                self.correction[leg] = float(np.clip(target - height, -self.limit, self.limit))
+                # weighted by the planned lift, so the correction vanishes at lift-off and
+                # touchdown: the foot lands where planned, with no step in the reference
+                weight = lift[leg] / self.gait.step_height if self.gait.step_height else 0.0
+                self.correction[leg] = weight * float(
+                    np.clip(target - height, -self.limit, self.limit))
             if self.correction[leg] == 0.0:
                 continue
             shift = thorax_rotation.T @ np.array([0.0, 0.0, self.correction[leg]])
