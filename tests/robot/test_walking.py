@@ -93,7 +93,7 @@ def test_swing_height_from_the_ground_lifts_the_feet_higher(tmp_path: Path) -> N
     body_relative = _swing_heights(tmp_path, swing_from_ground=False)
     from_ground = _swing_heights(tmp_path, swing_from_ground=True)
     assert from_ground.mean() > body_relative.mean() + 0.01
-    assert from_ground.min() > 0.5 * 0.04  # measured 27-35 mm; body-relative 10-36 mm
+    assert from_ground.min() > 0.5 * 0.04  # measured 33-53 mm; body-relative 10-36 mm
 
 
 def test_heading_hold_turns_the_standing_body_towards_the_heading() -> None:
