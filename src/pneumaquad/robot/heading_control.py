@@ -19,8 +19,8 @@ import numpy as np
 
 from pneumaquad.gait.walk import thorax_rotation
 
-from .kinematics import foot_jacobian, forward_kinematics_dh
-from .legs import leg_dh_table
+from .kinematics import forward_kinematics_dh
+from .legs import leg_dh_table, shift_feet
 from .recording import thorax_attitude
 from .simulation import RobotSimulation
 
@@ -74,10 +74,6 @@ class HeadingHold:
         turn = np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
         turn_thorax = self.to_body.T @ turn @ self.to_body
         reference = rows[len(rows) // 2]
-        for leg, table in enumerate(self.tables):
-            angles = reference[3 * leg : 3 * leg + 3]
-            foot = forward_kinematics_dh(table, angles)
-            shift = turn_thorax @ foot - foot
-            rows[:, 3 * leg : 3 * leg + 3] += np.linalg.solve(foot_jacobian(table, angles),
-                                                              shift)
-        return rows
+        feet = np.array([forward_kinematics_dh(table, reference[3 * leg : 3 * leg + 3])
+                         for leg, table in enumerate(self.tables)])  # thorax frame
+        return shift_feet(rows, self.tables, feet @ turn_thorax.T - feet)

@@ -16,11 +16,12 @@ from .kinematics import (
     IKResult,
     LegGeometry,
     dh_from_geometry,
+    foot_jacobian,
     forward_kinematics_dh,
     inverse_kinematics,
 )
 
-__all__ = ["leg_dh_table", "leg_geometry", "solve_leg", "thorax_frame_points"]
+__all__ = ["leg_dh_table", "leg_geometry", "shift_feet", "solve_leg", "thorax_frame_points"]
 
 
 def leg_geometry(robot: RobotModel, leg: str) -> LegGeometry:
@@ -66,3 +67,19 @@ def solve_leg(
 def thorax_frame_points(table: DHTable, angles: np.ndarray) -> np.ndarray:
     """Foot position(s) [m] in the thorax frame for joint angles (..., 3) [rad]."""
     return forward_kinematics_dh(table, angles)
+
+
+def shift_feet(rows: np.ndarray, tables: list[DHTable], shifts: np.ndarray) -> np.ndarray:
+    """Joint references ``rows`` (n, 3·legs) [rad] with each leg's foot moved by
+    ``shifts[leg]`` (3,) [m, thorax frame], through the leg Jacobian at the chunk's middle
+    row (small shifts: the linear step of the IK). Returns a new array."""
+    corrected = np.array(rows, dtype=float)
+    middle = corrected[len(corrected) // 2].copy()
+    for leg, table in enumerate(tables):
+        if not np.any(shifts[leg]):
+            continue
+        angles = middle[3 * leg : 3 * leg + 3]
+        corrected[:, 3 * leg : 3 * leg + 3] += np.linalg.solve(foot_jacobian(table, angles),
+                                                               shifts[leg])
+    return corrected
+

@@ -34,8 +34,7 @@ from pneumaquad.gait.crawl import CrawlGait, leg_phases, stance_flags
 from pneumaquad.gait.stability import centre_of_mass
 from pneumaquad.gait.walk import WalkPlan, thorax_rotation
 
-from .kinematics import foot_jacobian
-from .legs import leg_dh_table
+from .legs import leg_dh_table, shift_feet
 from .simulation import RobotSimulation
 
 __all__ = ["StanceControlGains", "StanceController", "desired_normal_forces",
@@ -238,11 +237,6 @@ class StanceController:
         self.last_time = self.simulation.time
         offsets = self.update(interval)
         rows = self._rows(np.asarray(times, dtype=float))
-        middle = rows[len(rows) // 2]
-        corrected = rows.copy()
-        for leg, table in enumerate(self.tables):
-            angles = middle[3 * leg : 3 * leg + 3]
-            shift = self.to_thorax @ np.array([0.0, 0.0, -offsets[leg]])
-            jacobian = foot_jacobian(table, angles)
-            corrected[:, 3 * leg : 3 * leg + 3] += np.linalg.solve(jacobian, shift)
-        return corrected
+        down = np.zeros((len(offsets), 3))
+        down[:, 2] = -offsets
+        return shift_feet(rows, self.tables, down @ self.to_thorax.T)

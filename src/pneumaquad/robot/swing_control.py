@@ -23,8 +23,8 @@ from numpy.typing import NDArray
 
 from pneumaquad.gait.crawl import CrawlGait, foot_positions_ground, stance_flags
 
-from .kinematics import foot_jacobian, forward_kinematics_dh
-from .legs import leg_dh_table
+from .kinematics import forward_kinematics_dh
+from .legs import leg_dh_table, shift_feet
 from .simulation import RobotSimulation
 
 __all__ = ["SwingHeightCorrection"]
@@ -89,21 +89,17 @@ class SwingHeightCorrection:
         lift = self._planned_lift(middle)
         reference = rows[len(rows) // 2]
         for leg, table in enumerate(self.tables):
-            angles = reference[3 * leg : 3 * leg + 3]
             if stance[leg]:
                 self.correction[leg] *= np.exp(-interval / self.fade)
-            else:
-                foot = forward_kinematics_dh(table, angles)  # thorax frame
-                height = thorax_height + float(thorax_rotation[2] @ foot)
-                target = self.lift_off_height[leg] + lift[leg]
-                # weighted by the planned lift, so the correction vanishes at lift-off and
-                # touchdown: the foot lands where planned, with no step in the reference
-                weight = lift[leg] / self.gait.step_height if self.gait.step_height else 0.0
-                self.correction[leg] = weight * float(
-                    np.clip(target - height, -self.limit, self.limit))
-            if self.correction[leg] == 0.0:
                 continue
-            shift = thorax_rotation.T @ np.array([0.0, 0.0, self.correction[leg]])
-            rows[:, 3 * leg : 3 * leg + 3] += np.linalg.solve(foot_jacobian(table, angles),
-                                                              shift)
-        return rows
+            foot = forward_kinematics_dh(table, reference[3 * leg : 3 * leg + 3])
+            height = thorax_height + float(thorax_rotation[2] @ foot)  # world z [m]
+            target = self.lift_off_height[leg] + lift[leg]
+            # weighted by the planned lift, so the correction vanishes at lift-off and
+            # touchdown: the foot lands where planned, with no step in the reference
+            weight = lift[leg] / self.gait.step_height if self.gait.step_height else 0.0
+            self.correction[leg] = weight * float(
+                np.clip(target - height, -self.limit, self.limit))
+        up = np.zeros((len(self.tables), 3))
+        up[:, 2] = self.correction
+        return shift_feet(rows, self.tables, up @ thorax_rotation)  # world → thorax
