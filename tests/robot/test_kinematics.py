@@ -15,15 +15,14 @@ from pneumaquad.robot.kinematics import (
     JOINT_NAMES,
     DHTable,
     LegGeometry,
-    UnreachableTargetError,
     dh_frames,
     dh_from_geometry,
     foot_jacobian,
     format_dh_table,
     forward_kinematics_dh,
     forward_kinematics_screw,
-    inverse_kinematics,
 )
+from pneumaquad.robot.leg_ik import UnreachableTargetError, inverse_kinematics
 
 HALF_PI = np.pi / 2
 LIMITS_DEG = np.array([[-47.0, 90.0], [-67.0, -1.0], [17.0, 95.0]])  # App. C.2.1 l.52, 63, 71

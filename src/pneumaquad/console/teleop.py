@@ -21,7 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import viser
 
-from pneumaquad.robot.kinematics import DHTable, IKResult
+from pneumaquad.robot.kinematics import DHTable
+from pneumaquad.robot.leg_ik import IKResult
 from pneumaquad.robot.legs import leg_dh_table, solve_leg, thorax_frame_points
 from pneumaquad.robot.simulation import RobotSimulation
 

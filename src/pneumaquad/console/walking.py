@@ -28,12 +28,8 @@ from pneumaquad.gait.crawl import LEGS, refuse_lift
 from pneumaquad.gait.online import OnlineCrawl, OnlineCrawlSettings
 from pneumaquad.gait.stability import centre_of_mass
 from pneumaquad.gait.walk import standing_feet, thorax_rotation
-from pneumaquad.robot.kinematics import (
-    DHTable,
-    exact_solutions,
-    foot_jacobian,
-    forward_kinematics_dh,
-)
+from pneumaquad.robot.kinematics import DHTable, foot_jacobian, forward_kinematics_dh
+from pneumaquad.robot.leg_ik import exact_solutions
 from pneumaquad.robot.legs import leg_dh_table
 from pneumaquad.robot.recording import thorax_attitude
 from pneumaquad.robot.simulation import RobotSimulation
@@ -52,7 +48,7 @@ def reach(table: DHTable, target: np.ndarray, current: np.ndarray,
 
     The analytic IK when the target is reachable; otherwise a few damped least-squares
     steps from ``current`` clipped into the limits (λ = ``damping`` [m]) — the clamped
-    exact search of :func:`pneumaquad.robot.kinematics.inverse_kinematics` is too slow
+    exact search of :func:`pneumaquad.robot.leg_ik.inverse_kinematics` is too slow
     for every chunk of a live gait, and a swing briefly out of reach only needs the
     nearest feasible pose approximately.
     """

@@ -13,13 +13,12 @@ import numpy as np
 from .builder import RobotModel
 from .kinematics import (
     DHTable,
-    IKResult,
     LegGeometry,
     dh_from_geometry,
     foot_jacobian,
     forward_kinematics_dh,
-    inverse_kinematics,
 )
+from .leg_ik import IKResult, inverse_kinematics
 
 __all__ = ["leg_dh_table", "leg_geometry", "shift_feet", "solve_leg", "thorax_frame_points"]
 
