@@ -16,6 +16,7 @@ from pneumaquad.robot.simulation import RobotSimulation
 from pneumaquad.robot.walking import (
     WALKING_ANGLES,
     WalkSettings,
+    tip_over_series,
     walking_outcome,
     walking_phases,
 )
@@ -27,7 +28,8 @@ def test_one_gait_cycle_moves_the_robot_forward_without_a_fall(tmp_path: Path) -
     phases, plan = walking_phases(sim, settings)
     assert plan.margins.min() >= 0.04 - 1e-9  # the plan keeps the requested margin
     run = run_phases(sim, phases, tmp_path, "walk")
-    outcome = walking_outcome(run.recording, run.summary, settings, sim.robot, plan)
+    tip_over = tip_over_series(run.recording, run.summary, sim.robot, plan)
+    outcome = walking_outcome(run.recording, run.summary, settings, sim.robot, tip_over)
     assert not outcome["fell"]
     # the centre of mass stays over the feet the gait holds down (statically stable gait)
     assert outcome["time with negative tip-over margin [%]"] < 5.0

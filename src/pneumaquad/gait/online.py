@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .crawl import LATERAL_SEQUENCE, LEGS
-from .stability import stability_margin, support_polygon
+from .stability import stability_margin, support_and_margin, support_polygon
 
 __all__ = ["OnlineCrawl", "OnlineCrawlSettings", "shift_for_margin", "swing_point"]
 
@@ -285,6 +285,4 @@ class OnlineCrawl:
 
     def margin(self) -> float:
         """Planned static margin [m] now (the feet on the ground, planned body)."""
-        stance = self.stance()
-        polygon = support_polygon(self.footholds[stance])
-        return float(stability_margin(self.body + self.com_offset, polygon))
+        return support_and_margin(self.footholds, self.stance(), self.body + self.com_offset)[1]

@@ -21,6 +21,7 @@ __all__ = [
     "centre_of_mass",
     "loaded_support",
     "stability_margin",
+    "support_and_margin",
     "support_polygon",
 ]
 
@@ -134,17 +135,17 @@ def centre_of_mass(model: mujoco.MjModel, data: mujoco.MjData) -> Array:
     return centre[:2]
 
 
-def loaded_support(
-    feet: ArrayLike, normal_forces: ArrayLike, com_xy: ArrayLike
+def support_and_margin(
+    feet: ArrayLike, stance: ArrayLike, com_xy: ArrayLike
 ) -> tuple[Array, float]:
-    """Support polygon of the loaded feet and the static margin of the centre of mass.
+    """Support polygon of the feet in ``stance`` and the static margin of the centre of mass.
 
     Parameters
     ----------
     feet : (n, 2 or 3) array [m]
         Foot positions (world; the first two coordinates are the ground plane).
-    normal_forces : (n,) array [N]
-        Normal contact force on each foot; above :data:`STANCE_FORCE` the foot is in stance.
+    stance : (n,) bool array
+        The feet that support the robot.
     com_xy : (2,) array [m]
         Ground projection of the centre of mass.
 
@@ -155,7 +156,7 @@ def loaded_support(
         :func:`stability_margin` of the centre of mass; NaN without support or with a
         non-finite centre of mass.
     """
-    stance = np.asarray(normal_forces) > STANCE_FORCE
+    stance = np.asarray(stance, dtype=bool)
     if not np.any(stance):
         return np.zeros((0, 2)), float("nan")
     polygon = support_polygon(np.asarray(feet, dtype=float)[stance, :2])
@@ -163,3 +164,11 @@ def loaded_support(
     if not np.all(np.isfinite(com)):
         return polygon, float("nan")
     return polygon, float(stability_margin(com, polygon))
+
+
+def loaded_support(
+    feet: ArrayLike, normal_forces: ArrayLike, com_xy: ArrayLike
+) -> tuple[Array, float]:
+    """:func:`support_and_margin` of the loaded feet: those whose normal contact force
+    ``normal_forces`` (n,) [N] is above :data:`STANCE_FORCE`."""
+    return support_and_margin(feet, np.asarray(normal_forces) > STANCE_FORCE, com_xy)

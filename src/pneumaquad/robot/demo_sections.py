@@ -128,11 +128,12 @@ def _walk(folder: Path, report: Report) -> None:
     settings = WalkSettings(distance=0.32)  # two 8 s cycles at 20 mm/s
     phases, plan = walking_phases(simulation, settings)
     run = run_phases(simulation, phases, folder / "robot-walk", "quadruped: crawl 0.32 m")
-    outcome = walking_outcome(run.recording, run.summary, settings, simulation.robot, plan)
+    tip_over = tip_over_series(run.recording, run.summary, simulation.robot, plan)
+    outcome = walking_outcome(run.recording, run.summary, settings, simulation.robot,
+                              tip_over)
     write_summary(folder / "robot-walk", {**run.summary, "walking": outcome})
     figure = plot_walking(run.recording, simulation.robot.legs,
-                          folder / "robot-walk" / "walking.png",
-                          tip_over_series(run.recording, run.summary, simulation.robot, plan),
+                          folder / "robot-walk" / "walking.png", tip_over,
                           "Crawl gait on flat ground (two cycles)")
     verdict = "success" if outcome["success"] else "failure"
     report.add(

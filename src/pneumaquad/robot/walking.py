@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from pneumaquad.gait.stability import STANCE_FORCE, stability_margin, support_polygon
+from pneumaquad.gait.stability import STANCE_FORCE, support_and_margin
 from pneumaquad.gait.walk import WalkPlan, plan_walk, robot_gait
 
 from .builder import RobotModel
@@ -141,18 +141,24 @@ def gait_support_margins(recording: dict[str, np.ndarray], legs: tuple[str, ...]
     feet = np.stack([np.column_stack([recording[f"{leg} foot x [m]"],
                                       recording[f"{leg} foot y [m]"]]) for leg in legs], axis=1)
     com = np.column_stack([recording["centre of mass x [m]"], recording["centre of mass y [m]"]])
-    return np.array([
-        stability_margin(com[i], support_polygon(feet[i][stance[i]])) if stance[i].any()
-        else np.nan for i in range(len(com))
-    ])
+    return np.array([support_and_margin(feet[i], stance[i], com[i])[1]
+                     for i in range(len(com))])
+
+
+def _walk_window(recording: dict[str, np.ndarray], summary: dict[str, Any]
+                 ) -> tuple[float, np.ndarray]:
+    """Start [s] of the walk phase and the recorded samples inside it (bool mask)."""
+    times = recording["time [s]"]
+    walk = summary["phases"]["walk"]
+    start = walk["start [s]"]
+    return start, (times >= start) & (times <= start + walk["duration [s]"])
 
 
 def tip_over_series(recording: dict[str, np.ndarray], summary: dict[str, Any],
                     robot: RobotModel, plan: WalkPlan) -> np.ndarray:
     """:func:`gait_support_margins` for every recorded sample (NaN outside the walk)."""
     times = recording["time [s]"]
-    start = summary["phases"]["walk"]["start [s]"]
-    walking = (times >= start) & (times <= start + summary["phases"]["walk"]["duration [s]"])
+    start, walking = _walk_window(recording, summary)
     step = float(plan.times[1] - plan.times[0]) if plan.times.size > 1 else 1.0
     index = np.clip(np.round((times[walking] - start) / step).astype(int), 0,
                     len(plan.stance) - 1)
@@ -164,7 +170,7 @@ def tip_over_series(recording: dict[str, np.ndarray], summary: dict[str, Any],
 
 def walking_outcome(
     recording: dict[str, np.ndarray], summary: dict[str, Any], settings: WalkSettings,
-    robot: RobotModel, plan: WalkPlan | None = None,
+    robot: RobotModel, tip_over: np.ndarray | None = None,
 ) -> dict[str, Any]:
     """Success or failure of a walking run, with the reason.
 
@@ -179,15 +185,14 @@ def walking_outcome(
     heading (**too slow** otherwise, listed with the other reasons: a robot stalled at an
     obstacle is too slow whatever else happened).
 
-    With the ``plan``, the tip-over margin (:func:`gait_support_margins`: the feet the
-    gait holds down, loaded or not) is reported beside the loaded-feet margin: a robot
+    With ``tip_over`` (:func:`tip_over_series` of the run: the margin in the support of
+    the feet the gait holds down, loaded or not) it is reported beside the loaded-feet
+    margin: a robot
     rocking on a diagonal pair of feet has a negative loaded-feet margin while its
     tip-over margin stays positive (the rocking is bounded by the unloaded feet, a few
     millimetres above the ground).
     """
-    times = recording["time [s]"]
-    start = summary["phases"]["walk"]["start [s]"]
-    walking = (times >= start) & (times <= start + summary["phases"]["walk"]["duration [s]"])
+    _, walking = _walk_window(recording, summary)
     direction = np.array([math.cos(settings.heading), math.sin(settings.heading)])
     x, y = recording["thorax x [m]"], recording["thorax y [m]"]
     first, last = np.flatnonzero(walking)[[0, -1]]
@@ -225,13 +230,15 @@ def walking_outcome(
             at_limit.append(name)
     if at_limit:
         reasons.append("joint limit")
-    if plan is not None:
-        tip = tip_over_series(recording, summary, robot, plan)[walking]
-        tip_over = {"time with negative tip-over margin [%]": 100.0 * float(np.mean(tip < 0.0)),
-                    "smallest tip-over margin [m]": float(np.nanmin(tip)),
-                    "median tip-over margin [m]": float(np.nanmedian(tip))}
+    if tip_over is not None:
+        tip = tip_over[walking]
+        tip_over_figures = {
+            "time with negative tip-over margin [%]": 100.0 * float(np.mean(tip < 0.0)),
+            "smallest tip-over margin [m]": float(np.nanmin(tip)),
+            "median tip-over margin [m]": float(np.nanmedian(tip)),
+        }
     else:
-        tip_over = {}
+        tip_over_figures = {}
     air = summary["phases"]["walk"]["air consumed [NL]"]
     outcome = {
         "distance travelled [m]": travelled,
@@ -240,7 +247,7 @@ def walking_outcome(
         "fell": fallen,
         "time with negative static margin [%]": 100.0 * violated,
         "smallest static margin [m]": float(np.nanmin(margin)) if margin.size else math.nan,
-        **tip_over,
+        **tip_over_figures,
         "largest stance-foot slide [m]": slip,
         "largest loaded-foot path [m]": path,
         "joints at a limit": at_limit,
