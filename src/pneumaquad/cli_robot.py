@@ -26,6 +26,8 @@ robot_app = typer.Typer(help="The whole quadruped on its 12 pneumatic joints.",
 RobotParamsOption = Annotated[
     str, typer.Option("--params", "-p", help="Robot parameter set name or TOML path.")
 ]
+EnvironmentOption = Annotated[str, typer.Option(help="flat, block, ramp or rough.")]
+SeedOption = Annotated[int, typer.Option(help="Seed of the rough terrain.")]
 VideoOption = Annotated[
     bool, typer.Option("--video/--no-video", help="Render video.mp4, a GIF and first-frame.png.")
 ]
@@ -182,12 +184,12 @@ def robot_stand(
     posture: Annotated[
         bool, typer.Option("--posture/--no-posture", help="Body height/roll/pitch commands.")
     ] = True,
-    environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
+    environment: EnvironmentOption = "flat",
     configuration: Annotated[
         str, typer.Option(help="quadruped, or testbed (front legs, rear on wheels).")
     ] = "quadruped",
     supply: Annotated[str | None, typer.Option(help="Override supply: ideal or tank.")] = None,
-    seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
+    seed: SeedOption = 0,
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
     output: OutputOption = None,
@@ -230,8 +232,8 @@ def robot_walk(
     heading_hold: Annotated[bool, typer.Option(
         "--heading-hold/--no-heading-hold",
         help="Hold the initial heading (robot.heading_control).")] = True,
-    environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
-    seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
+    environment: EnvironmentOption = "flat",
+    seed: SeedOption = 0,
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
     output: OutputOption = None,
@@ -265,9 +267,9 @@ def robot_walk(
     if "walk" not in summary["phases"]:
         console.print("walking: not judged (the run stopped before the walk began)")
         return
-    outcome = walking_outcome(recording, summary, settings, simulation.robot, plan)
-    plot_walking(recording, simulation.robot.legs, folder / "walking.png",
-                 tip_over_series(recording, summary, simulation.robot, plan),
+    tip_over = tip_over_series(recording, summary, simulation.robot, plan)
+    outcome = walking_outcome(recording, summary, settings, simulation.robot, tip_over)
+    plot_walking(recording, simulation.robot.legs, folder / "walking.png", tip_over,
                  f"walk {distance:g} m on {environment}")
     outcome["planned smallest static margin [m]"] = float(plan.margins.min())
     outcome["planned unreachable IK samples [count]"] = int(
@@ -292,8 +294,8 @@ def robot_export(
     configuration: Annotated[str, typer.Option(help="quadruped, fixed or testbed.")] = (
         "quadruped"
     ),
-    environment: Annotated[str, typer.Option(help="flat, block, ramp or rough.")] = "flat",
-    seed: Annotated[int, typer.Option(help="Seed of the rough terrain.")] = 0,
+    environment: EnvironmentOption = "flat",
+    seed: SeedOption = 0,
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
 ) -> None:
