@@ -219,12 +219,22 @@ def robot_walk(
     duty_factor: Annotated[float, typer.Option(min=0.75, max=0.99, help="Stance fraction.")]
     = 0.9,
     period: Annotated[float, typer.Option(min=0.5, help="Gait cycle [s].")] = 8.0,
-    margin: Annotated[float, typer.Option(min=0.0, help="Planned static margin [m].")] = 0.04,
+    margin: Annotated[float, typer.Option(min=0.0, help="Planned static margin [m].")] = 0.06,
     step_height: Annotated[float, typer.Option(min=0.0, help="Foot lift at mid-swing [m].")]
     = 0.04,
+    lift_fraction: Annotated[float, typer.Option(
+        min=0.0, max=0.49, help="Share of the swing, at each end, spent only lifting or "
+        "lowering the foot.")] = 0.25,
+    transfer_gap: Annotated[float, typer.Option(
+        min=0.0, max=0.5, help="Cycle fraction with four feet down between a rear "
+        "touchdown and the front lift-off (load transfer).")] = 0.04,
     stance_control: Annotated[bool, typer.Option(
         "--stance-control/--no-stance-control",
-        help="Load sharing and levelling of the stance feet (robot.stance_control).")] = False,
+        help="Force-controlled stance: each stance leg's cylinders track the load "
+             "statics gives it (robot.stance_control); off: plain position control.")]
+    = True,
+    force_gain: Annotated[float, typer.Option(
+        min=1e-6, help="Force tracking gain of the stance cylinders [V/N].")] = 0.01,
     swing_from_ground: Annotated[bool, typer.Option(
         "--swing-from-ground/--swing-from-body",
         help="Swing height above the ground at lift-off (robot.swing_control), or "
@@ -244,16 +254,24 @@ def robot_walk(
     import json
     import math
 
-    from pneumaquad.robot.stance_control import StanceControlGains
+    from pneumaquad.robot.stance_control import StanceControlSettings
     from pneumaquad.robot.walking import WalkSettings, walking_outcome, walking_phases
 
     _check_environment(environment)
+    largest_gap = 2.0 * duty_factor - 1.5
+    if transfer_gap > largest_gap + 1e-12:
+        raise typer.BadParameter(
+            f"{transfer_gap:g} does not fit: a side's two swings and the gap take "
+            f"2·(1 − duty factor) + gap ≤ 0.5 of the cycle, so with duty factor "
+            f"{duty_factor:g} the gap is at most {max(largest_gap, 0.0):.3g}",
+            param_hint="--transfer-gap")
+    stance = StanceControlSettings(force_gain=force_gain) if stance_control else None
     settings = WalkSettings(speed=speed, heading=math.radians(heading),
                             duty_factor=duty_factor, period=period, minimum_margin=margin,
                             distance=distance, step_height=step_height,
+                            lift_fraction=lift_fraction, transfer_gap=transfer_gap,
                             swing_from_ground=swing_from_ground,
-                            heading_hold=heading_hold,
-                            stance_control=StanceControlGains() if stance_control else None)
+                            heading_hold=heading_hold, stance_control=stance)
     simulation = _simulation(params, overrides, "quadruped", environment, seed)
     phases, plan = walking_phases(simulation, settings)
     folder = _run(simulation, phases, output, f"walk-{environment}",

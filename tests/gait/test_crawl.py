@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -101,6 +103,52 @@ def test_invalid_gaits_are_refused():
         CrawlGait(FEET, duty_factor=0.7)
     with pytest.raises(ValueError, match="sway"):
         CrawlGait(FEET, duty_factor=0.75, sway=1.0)
+    with pytest.raises(ValueError, match="transfer gap"):  # 2·0.15 + 0.25 > 0.5
+        CrawlGait(FEET, duty_factor=0.85, transfer_gap=0.25)
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.04, 0.1])
+def test_transfer_gap_keeps_four_feet_down_between_rear_touchdown_and_front_lift_off(gap):
+    gait = CrawlGait(FEET, duty_factor=0.9, period=PERIOD, stride=0.1, transfer_gap=gap)
+    stance = stance_flags(gait, TIMES)
+    assert np.allclose(stance.mean(axis=0), 0.9, atol=1e-9)  # duty factor unchanged
+    assert (~stance).sum(axis=1).max() == 1
+    assert swing_order(gait) == LATERAL_SEQUENCE
+    cycle = stance[:4000]
+    for rear, front in (("rear_left", "front_left"), ("rear_right", "front_right")):
+        touchdown = np.flatnonzero(~cycle[:, LEGS.index(rear)])[-1] + 1
+        lift_off = np.flatnonzero(~cycle[:, LEGS.index(front)])[0]
+        assert (lift_off - touchdown) * 1e-3 == pytest.approx(gap * PERIOD, abs=1.5e-3)
+        assert np.all(cycle[touchdown:lift_off])  # four feet down in between
+    # stance feet still stand still, and the body still travels one stride per β·T
+    ground = foot_targets(gait, TIMES)[..., :2] + body_positions(gait, TIMES)[:, None, :]
+    for k in range(4):
+        still = stance[1:, k] & stance[:-1, k]
+        assert np.abs(np.diff(ground[:, k], axis=0))[still].max() < 1e-12
+    margins = plan_margins(sway_for_margin(gait, 0.04), samples=800)[1]
+    assert margins.min() >= 0.04 - 1e-4
+
+
+def test_start_up_begins_from_the_symmetric_stance_and_joins_the_steady_gait():
+    steady = sway_for_margin(CrawlGait(FEET, duty_factor=0.9, period=PERIOD, stride=0.1,
+                                       transfer_gap=0.04), 0.04)
+    gait = dataclasses.replace(steady, start_up=True)
+    ground = foot_positions_ground(gait, TIMES)
+    assert np.allclose(ground[0, :, :2], FEET[:, :2])  # neutral feet at t = 0
+    assert np.ptp(ground[0, :, 0]) == pytest.approx(0.75)  # left and right abreast
+    stance = stance_flags(gait, TIMES)
+    for k in range(4):  # each foot stays neutral until its first lift-off
+        first_lift = np.flatnonzero(~stance[:, k])[0]
+        assert np.allclose(ground[:first_lift, k, :2], FEET[k, :2])
+    after = TIMES >= PERIOD  # from the second cycle on, the steady gait exactly
+    assert np.allclose(ground[after], foot_positions_ground(steady, TIMES[after]))
+    # the first swings are cycloids too, from the neutral foothold: no jump; those of
+    # the legs that lift last are longer (their feet stood while the body moved)
+    step = np.linalg.norm(np.diff(ground[..., :2], axis=0), axis=-1)
+    steady_step = np.linalg.norm(np.diff(ground[after][..., :2], axis=0), axis=-1)
+    assert steady_step.max() < step.max() < 1.25 * steady_step.max()
+    # the plan's margin is that of a steady cycle; the start-up's is reported by the plan
+    assert plan_margins(gait)[1] == pytest.approx(plan_margins(steady)[1])
 
 
 def test_refuse_lift_keeps_the_centre_of_mass_supported():

@@ -1,4 +1,5 @@
-"""Stance control and walking judgement: statics of load sharing, twist mode, slides."""
+"""Stance control and walking judgement: statics of load sharing, forces through the leg,
+force tracking on the simulated robot, slides."""
 
 from __future__ import annotations
 
@@ -6,23 +7,23 @@ import numpy as np
 import pytest
 
 from pneumaquad.robot.stance_control import (
+    cylinder_forces_for_foot_force,
     desired_normal_forces,
-    stance_weights,
-    twist_component,
+    load_shares,
 )
 from pneumaquad.robot.walking import contact_slide, gait_support_margins
 
 FEET = np.array([[0.3, 0.25], [0.3, -0.25], [-0.3, 0.25], [-0.3, -0.25]])
 
 
-def test_weights_are_zero_in_swing_and_ramp_around_stance():
-    phases = np.array([0.0, 0.1, 0.2, 0.24, 0.5, 0.96, 0.999])
-    weights = stance_weights(phases, duty_factor=0.8, transfer=0.08)
-    assert weights[0] == weights[1] == 0.0  # swinging
-    assert weights[2] == pytest.approx(0.0)  # touchdown
-    assert weights[3] == pytest.approx(0.5)  # half way up the rise
-    assert weights[4] == 1.0
-    assert weights[5] == pytest.approx(0.5) and weights[6] < 0.02  # unloading before lift
+def test_load_shares_are_zero_in_swing_and_ramp_around_stance():
+    phases = np.array([0.0, 0.1, 0.2, 0.205, 0.5, 0.98, 0.999])
+    shares = load_shares(phases, duty_factor=0.8, rise=0.01, fall=0.04)
+    assert shares[0] == shares[1] == 0.0  # swinging
+    assert shares[2] == pytest.approx(0.0)  # touchdown
+    assert shares[3] == pytest.approx(0.5)  # half way up the rise
+    assert shares[4] == 1.0
+    assert shares[5] == pytest.approx(0.5) and shares[6] < 0.03  # unloading before lift
 
 
 @pytest.mark.parametrize("com", [(0.0, 0.0), (0.05, -0.03), (-0.1, 0.08)])
@@ -48,13 +49,19 @@ def test_centre_of_mass_outside_the_support_never_asks_a_foot_to_pull():
     assert np.all(forces >= 0.0) and forces.sum() == pytest.approx(30.0)
 
 
-def test_twist_component_removes_height_and_tilt_and_keeps_the_diagonal_mode():
-    plane = 0.01 + 0.02 * FEET[:, 0] - 0.03 * FEET[:, 1]
-    assert twist_component(plane, FEET, np.ones(4, bool)) == pytest.approx(0.0, abs=1e-12)
-    twist = np.array([1.0, -1.0, -1.0, 1.0]) * 0.002
-    assert twist_component(plane + twist, FEET, np.ones(4, bool)) == pytest.approx(twist)
-    three = np.array([True, True, True, False])
-    assert np.all(twist_component(twist, FEET, three) == 0.0)  # three feet: no twist mode
+def test_cylinder_forces_of_a_planar_two_link_leg_match_hand_statics():
+    # Hip at the origin, thigh 0.2 m straight out along x, shank 0.3 m straight down:
+    # joints about y, angles q1 (hip), q2 (knee). Foot at (0.2, 0, -0.3).
+    # d(foot)/dq1 = y × r = (-0.3, 0, -0.2); d(foot)/dq2 = y × (0, 0, -0.3) = (-0.3, 0, 0).
+    jacobian = np.array([[-0.3, -0.3], [0.0, 0.0], [-0.2, 0.0]])
+    ground = np.array([0.0, 0.0, 20.0])  # 20 N up on the foot
+    bias = np.array([1.0, 0.5])  # gravity of the links [N m]
+    arms = np.array([0.04, -0.025])
+    forces = cylinder_forces_for_foot_force(jacobian, bias, arms, ground)
+    # Moments about each joint axis (y) of the ground force: hip r × F = -x F_z = -4 N m,
+    # knee 0 (the force passes through it); the cylinders must supply bias - moment.
+    expected_torques = bias - np.array([-0.2 * 20.0, 0.0])
+    assert arms * forces == pytest.approx(expected_torques)
 
 
 def test_contact_slide_counts_net_motion_per_loaded_stretch_not_jitter():

@@ -7,11 +7,15 @@ the same side, then the rear and front legs of the other side — the **lateral 
 rear_left → front_left → rear_right → front_right. Among the regular creeping gaits it
 is the one with the largest longitudinal stability margin.
 
-Phases (cycle fractions, 0 = lift-off of rear_left, β the duty factor ≥ 0.75):
-rear_left lifts at 0, front_left at 1 − β (as rear_left touches down), rear_right at 0.5,
-front_right at 1.5 − β. Each leg swings for (1 − β) of the cycle, so at most one leg is in
-the air; for β > 0.75 two four-legged phases, [2(1 − β), 0.5] and [2.5 − 2β, 1] —
-i.e. after each side's pair of swings — are left for shifting the body sideways (sway).
+Phases (cycle fractions, 0 = lift-off of rear_left, β the duty factor ≥ 0.75, g the
+transfer gap, 0 by default): rear_left lifts at 0, front_left at 1 − β + g (with g = 0 as
+rear_left touches down), rear_right at 0.5, front_right at 1.5 − β + g. Each leg swings
+for (1 − β) of the cycle, so at most one leg is in the air; for β > 0.75 two four-legged
+phases, [2(1 − β) + g, 0.5] and [2.5 − 2β + g, 1] — i.e. after each side's pair of
+swings — are left for shifting the body sideways (sway). The gap g is a short
+four-legged phase between a side's rear touchdown and its front lift-off, in which a
+force-controlled stance can move the load off the front leg before it lifts (without
+it, the load jumps from the front leg to the rear one at the instant of lift-off).
 Walking backwards (|heading| > 90°) swaps the roles of front and rear legs.
 
 Frames: the *body frame* has x forward, y left, z up, origin at the thorax origin, axes
@@ -97,6 +101,8 @@ class CrawlGait:
     sway: float = 1.0
     com_offset: Array = dataclasses.field(default_factory=lambda: np.zeros(2))
     lift_fraction: float = 0.0
+    transfer_gap: float = 0.0
+    start_up: bool = False
 
     def __post_init__(self) -> None:
         feet = np.array(self.neutral_feet, dtype=float)
@@ -112,6 +118,11 @@ class CrawlGait:
             raise ValueError(f"lift fraction {self.lift_fraction} must be in [0, 0.5)")
         if self.sway != 0.0 and self.duty_factor <= 0.75:
             raise ValueError("body sway needs four-legged phases: duty factor > 0.75")
+        side = 2.0 * (1.0 - self.duty_factor) + self.transfer_gap
+        if self.transfer_gap < 0.0 or side > 0.5 + 1e-12:
+            raise ValueError(f"transfer gap {self.transfer_gap} must be in "
+                             f"[0, {2.0 * self.duty_factor - 1.5:.3g}] (2β − 1.5): a side's "
+                             "two swings and the gap must fit in half a cycle")
 
     @property
     def speed(self) -> float:
@@ -124,17 +135,19 @@ class CrawlGait:
         return np.array([math.cos(self.heading), math.sin(self.heading)])
 
 
-def lift_off_offsets(duty_factor: float, backward: bool = False) -> Array:
+def lift_off_offsets(duty_factor: float, backward: bool = False,
+                     transfer_gap: float = 0.0) -> Array:
     """Lift-off time of each leg (:data:`LEGS` order) as a cycle fraction in [0, 1)."""
-    swing = 1.0 - duty_factor
-    rear_left, front_left, rear_right, front_right = 0.0, swing, 0.5, 0.5 + swing
+    second = 1.0 - duty_factor + transfer_gap  # a side's second lift-off
+    rear_left, front_left, rear_right, front_right = 0.0, second, 0.5, 0.5 + second
     if backward:  # the front legs lead: front_left → rear_left → front_right → rear_right
-        front_left, rear_left, front_right, rear_right = 0.0, swing, 0.5, 0.5 + swing
+        front_left, rear_left, front_right, rear_right = 0.0, second, 0.5, 0.5 + second
     return np.array([front_left, front_right, rear_left, rear_right])
 
 
 def _offsets(gait: CrawlGait) -> Array:
-    return lift_off_offsets(gait.duty_factor, backward=math.cos(gait.heading) < 0.0)
+    return lift_off_offsets(gait.duty_factor, backward=math.cos(gait.heading) < 0.0,
+                            transfer_gap=gait.transfer_gap)
 
 
 def swing_order(gait: CrawlGait) -> tuple[str, ...]:
@@ -170,7 +183,11 @@ def foot_positions_ground(gait: CrawlGait, times: ArrayLike) -> Array:
     edge = gait.lift_fraction
     moving = np.clip((progress - edge) / (1.0 - 2.0 * edge), 0.0, 1.0)
     cycloid = moving - np.sin(2.0 * math.pi * moving) / (2.0 * math.pi)
-    along = np.where(in_swing, along - travel * (1.0 - cycloid), along)
+    previous = along - travel  # where the swinging foot lifted off
+    if gait.start_up:  # neutral until the first lift-off, from which the first swing starts
+        previous = np.where(count == 0, 0.0, previous)
+        along = np.where(count < 0, 0.0, along)
+    along = np.where(in_swing, previous + (along - previous) * cycloid, along)
     if edge > 0.0:  # rise over ℓ, stay up, lower over the last ℓ (half-cosine ramps)
         ramp = np.clip(np.minimum(progress, 1.0 - progress) / edge, 0.0, 1.0)
         height = 0.5 * (1.0 - np.cos(math.pi * ramp))
@@ -201,13 +218,13 @@ def sway_shifts(gait: CrawlGait) -> Array:
     mid-swing (planned without sway); a side's shift puts the centre of mass over the
     mean lateral position of its two swings' incentres, times ``gait.sway``.
     """
-    still = dataclasses.replace(gait, sway=0.0)
+    still = dataclasses.replace(gait, sway=0.0, start_up=False)  # a steady cycle
     offsets = _offsets(gait)
     swing = 1.0 - gait.duty_factor
     shifts = np.zeros(2)
     for side, first in enumerate((0.0, 0.5)):
         lateral = []
-        for start in (first, first + swing):
+        for start in (first, first + swing + gait.transfer_gap):
             time = (start + 0.5 * swing) * gait.period
             leg = int(np.argmin(np.abs(offsets - start)))
             feet = foot_targets(still, np.array([time]))[0, :, :2]
@@ -220,7 +237,7 @@ def _lateral_sway(gait: CrawlGait, times: Array) -> Array:
     if gait.sway == 0.0:
         return np.zeros_like(times)
     first, second = sway_shifts(gait)
-    pair = 2.0 * (1.0 - gait.duty_factor)  # one side's two swings
+    pair = 2.0 * (1.0 - gait.duty_factor) + gait.transfer_gap  # a side's two swings
     window = 0.5 - pair  # four-legged phase
     cycle = np.mod(times / gait.period, 1.0)
     to_second = first + (second - first) * _smoothstep((cycle - pair) / window)
@@ -252,7 +269,8 @@ def plan_margins(gait: CrawlGait, times: ArrayLike | None = None,
     ----------
     gait : CrawlGait
     times : (n,) array [s], optional
-        Default: ``samples`` instants over one cycle.
+        Default: ``samples`` instants over one steady cycle (with ``gait.start_up``
+        the second: the start-up cycle, from the symmetric stance, is not periodic).
     samples : int
 
     Returns
@@ -262,7 +280,8 @@ def plan_margins(gait: CrawlGait, times: ArrayLike | None = None,
         Signed distance of ``gait.com_offset`` to the stance feet's support polygon.
     """
     if times is None:
-        times = np.linspace(0.0, gait.period, samples, endpoint=False)
+        first = gait.period if gait.start_up else 0.0
+        times = np.linspace(first, first + gait.period, samples, endpoint=False)
     times = np.asarray(times, dtype=float)
     feet = foot_targets(gait, times)[..., :2]
     stance = stance_flags(gait, times)
@@ -276,7 +295,7 @@ def plan_margins(gait: CrawlGait, times: ArrayLike | None = None,
 def sway_for_margin(gait: CrawlGait, minimum_margin: float, samples: int = 200,
                     iterations: int = 30) -> CrawlGait:
     """The gait with the least sway (fraction in [0, 1], bisection) whose planned static
-    margin over a cycle is at least ``minimum_margin`` [m] (small sways spare the legs'
+    margin over a steady cycle is at least ``minimum_margin`` [m] (small sways spare the legs'
     sideways reach).
 
     Raises

@@ -75,7 +75,8 @@ def _body_com(robot: RobotModel, angles: Array) -> Array:
 def robot_gait(robot: RobotModel, speed: float, heading: float = 0.0,
                duty_factor: float = 0.8, period: float = 4.0, step_height: float = 0.04,
                sway: float = 1.0, angles: Array = STANDING_ANGLES,
-               minimum_margin: float | None = None, lift_fraction: float = 0.0) -> CrawlGait:
+               minimum_margin: float | None = None, lift_fraction: float = 0.0,
+               transfer_gap: float = 0.0, start_up: bool = False) -> CrawlGait:
     """A crawl gait for ``robot`` about its feet at ``angles`` (speed [m/s], heading [rad]).
 
     The stride is speed·β·T; the centre of mass is the robot's in the pose ``angles``.
@@ -86,7 +87,8 @@ def robot_gait(robot: RobotModel, speed: float, heading: float = 0.0,
     gait = CrawlGait(standing_feet(robot, angles), duty_factor=duty_factor, period=period,
                      stride=speed * duty_factor * period, step_height=step_height,
                      heading=heading, sway=sway, com_offset=com,
-                     lift_fraction=lift_fraction)
+                     lift_fraction=lift_fraction, transfer_gap=transfer_gap,
+                     start_up=start_up)
     return gait if minimum_margin is None else sway_for_margin(gait, minimum_margin)
 
 
@@ -120,12 +122,14 @@ class CycleSolution:
         return {leg: int((~self.reachable[:, k]).sum()) for k, leg in enumerate(LEGS)}
 
 
-def solve_cycle(robot: RobotModel, gait: CrawlGait, samples: int = 200) -> CycleSolution:
-    """Solve the leg IK on ``samples`` instants over one cycle (clamped into the limits)."""
+def solve_cycle(robot: RobotModel, gait: CrawlGait, samples: int = 200,
+                first: bool = False) -> CycleSolution:
+    """Solve the leg IK on ``samples`` instants over one cycle (clamped into the limits):
+    a steady cycle, or with ``first`` the gait's first cycle (its start-up, if any)."""
     if tuple(robot.legs) != LEGS:
         raise ValueError(f"the crawl gait needs the legs {LEGS}, the robot has {robot.legs}")
     phases = np.arange(samples) / samples
-    times = phases * gait.period
+    times = (phases + (0.0 if first else 1.0)) * gait.period
     to_thorax = thorax_rotation(robot).T
     targets = foot_targets(gait, times) @ to_thorax.T
     angles = np.empty((samples, 12))
@@ -167,7 +171,9 @@ class WalkPlan:
     references : (steps, 12) [rad]  ``robot.joint_names`` order.
     stance : (steps, 4) bool  planned stance per leg (:data:`.crawl.LEGS` order).
     margins : (steps,) [m]  planned static margin (gait centre of mass).
-    cycle : CycleSolution  the IK grid the references interpolate.
+    cycle : CycleSolution  the IK grid the references interpolate (steady cycles).
+    start_up : CycleSolution or None  the IK grid of the first cycle of a gait with a
+        start-up (:attr:`.crawl.CrawlGait.start_up`).
     """
 
     times: Array
@@ -175,6 +181,7 @@ class WalkPlan:
     stance: NDArray[np.bool_]
     margins: Array
     cycle: CycleSolution
+    start_up: CycleSolution | None = None
 
 
 def plan_walk(robot: RobotModel, gait: CrawlGait, duration: float,
@@ -200,5 +207,15 @@ def plan_walk(robot: RobotModel, gait: CrawlGait, duration: float,
         np.interp(fraction, cycle.phases, cycle.angles[:, j], period=1.0)
         for j in range(cycle.angles.shape[1])
     ])
+    start_up = None
+    if gait.start_up:
+        start_up = solve_cycle(robot, gait, samples, first=True)
+        first = times < gait.period
+        # the first cycle ends where the steady one begins: interpolate towards it
+        phases = np.append(start_up.phases, 1.0)
+        angles = np.vstack([start_up.angles, cycle.angles[:1]])
+        references[first] = np.column_stack([
+            np.interp(fraction[first], phases, angles[:, j]) for j in range(angles.shape[1])
+        ])
     _, margins = plan_margins(gait, times)
-    return WalkPlan(times, references, stance_flags(gait, times), margins, cycle)
+    return WalkPlan(times, references, stance_flags(gait, times), margins, cycle, start_up)

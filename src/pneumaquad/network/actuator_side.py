@@ -119,7 +119,7 @@ class ActuatorSide:
             self._lengths, self._velocities, self._tendon_ids, self._actuator_ids,
             self._control, self._frictionloss, self._damping, s.linkage, s.seal, True,
             s.params, s.state, s.supply, s.outputs, s.gains, s.gain_scale, s.extra,
-            s.pid_state, s.force_mean, s.reference_angles, s.open_loop_voltage, s.commands,
+            s.pid_state, s.force_reference, s.reference_angles, s.open_loop_voltage, s.commands,
             s.positions, s.velocities, s.reference_positions, s.control_step, s.substeps,
         )
         self.steps_taken += 1

@@ -14,7 +14,16 @@ import math
 
 import numpy as np
 
-from pneumaquad.control.pid import C_INTEGRAL, G_KD, G_KI, G_KP, N_GAINS, pid_update
+from pneumaquad.control.pid import (
+    C_INTEGRAL,
+    G_KD,
+    G_KI,
+    G_KP,
+    G_UMAX,
+    G_UMIN,
+    N_GAINS,
+    pid_update,
+)
 from pneumaquad.jit import compiled
 from pneumaquad.kernel import step_actuators
 from pneumaquad.layout import (
@@ -47,7 +56,9 @@ N_SEAL = 5
 X_FORCE_GAIN = 0  # force feedback gain [V/N]
 X_FORCE_TAU = 1  # low-pass time constant of the force mean [s]
 X_COMMANDED = 2  # 1: closed loop, 0: valve held at its offset, 2: open loop voltage
-N_EXTRA = 3
+X_FORCE_TRACKING = 3  # force tracking gain [V/N]; > 0: force_reference is a set-point
+X_FORCE_STIFFNESS = 4  # factor on Kp and Kd while tracking forces (the stance's spring)
+N_EXTRA = 5
 
 MODE_UNCOMMANDED = 0.0
 MODE_CLOSED_LOOP = 1.0
@@ -98,7 +109,7 @@ def robot_control_step(
     gain_scale,
     extra,
     pid_state,
-    force_mean,
+    force_reference,
     reference_angles,
     open_loop_voltage,
     commands,
@@ -117,6 +128,15 @@ def robot_control_step(
     friction becomes the tendon's dry friction (Stribeck breakaway at the current speed)
     and viscous damping; otherwise the actuator file's force law is applied through the
     motor, its slope as tendon damping so MuJoCo's implicit integrator treats it stably.
+
+    ``force_reference`` [N] is per cylinder either the low-pass mean of its pneumatic
+    force (pressure feedback: ``voltage -= X_FORCE_GAIN · (F − mean)``, a damping term)
+    or, where ``extra[i, X_FORCE_TRACKING]`` = k_F > 0, a force set-point written by the
+    caller: ``voltage += k_F · (F_set − F)``, with the PID's integral off and its Kp and
+    Kd multiplied by ``extra[i, X_FORCE_STIFFNESS]`` = s, so that the cylinder pushes
+    with F_set plus a position spring of stiffness s·Kp / k_F [N/m] and a damper of
+    s·Kd / k_F [N s/m] (a compliant, force-controlled stance; the integral would
+    otherwise pull the piston back to its reference whatever the load).
     """
     count = params.shape[0]
     scaled = np.empty(N_GAINS)
@@ -135,16 +155,25 @@ def robot_control_step(
             scaled[G_KP] *= gain_scale[i]
             scaled[G_KI] *= gain_scale[i]
             scaled[G_KD] *= gain_scale[i]
+            tracking = extra[i, X_FORCE_TRACKING]
+            if tracking > 0.0:
+                scaled[G_KP] *= extra[i, X_FORCE_STIFFNESS]
+                scaled[G_KD] *= extra[i, X_FORCE_STIFFNESS]
+                scaled[G_KI] = 0.0
             if scaled[G_KI] == 0.0:
                 pid_state[i, C_INTEGRAL] = 0.0
             voltage = pid_update(
                 scaled, pid_state[i], reference_positions[i], positions[i], control_step
             )
             force_gain = extra[i, X_FORCE_GAIN]
-            if force_gain > 0.0:
-                deviation = outputs[i, O_PNEUMATIC_FORCE] - force_mean[i]
+            if tracking > 0.0:
+                force_error = force_reference[i] - outputs[i, O_PNEUMATIC_FORCE]
+                voltage += tracking * force_error
+                voltage = min(max(voltage, scaled[G_UMIN]), scaled[G_UMAX])
+            elif force_gain > 0.0:
+                deviation = outputs[i, O_PNEUMATIC_FORCE] - force_reference[i]
                 voltage -= force_gain * deviation
-                voltage = min(max(voltage, scaled[6]), scaled[7])
+                voltage = min(max(voltage, scaled[G_UMIN]), scaled[G_UMAX])
             commands[i] = voltage
         elif mode == MODE_OPEN_LOOP:
             reference_positions[i] = positions[i]
@@ -159,7 +188,8 @@ def robot_control_step(
         tendon = tendon_ids[i]
         force = outputs[i, O_PNEUMATIC_FORCE]
         tau = extra[i, X_FORCE_TAU]
-        force_mean[i] += control_step / (tau + control_step) * (force - force_mean[i])
+        if extra[i, X_FORCE_TRACKING] == 0.0:
+            force_reference[i] += control_step / (tau + control_step) * (force - force_reference[i])
         v = velocities[i]
         if mujoco_friction:
             set_seal_friction(seal, tendon_ids, tendon_velocity, tendon_frictionloss,

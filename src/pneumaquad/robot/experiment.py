@@ -156,6 +156,7 @@ def run_phases(
                 if not phase.feedback:
                     table = _reference_table(phase, simulation.time, steps, dt, count)
                 simulation.extra[:, X_COMMANDED] = modes
+                simulation.stop_force_tracking()  # a feedback phase may track forces
                 if voltages is not None:
                     simulation.open_loop_voltage[:] = np.where(
                         np.isfinite(voltages), voltages, simulation.open_loop_voltage

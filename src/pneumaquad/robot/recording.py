@@ -3,9 +3,11 @@
 Columns are named ``quantity [unit]``; per-joint columns start with the joint name
 (``"front_right_gamma angle [rad]"``), per-leg columns with the leg name. A joint's
 ``control mode [-]`` is 0 with its valve held at the offset, 1 under closed-loop control
-and 2 with an open-loop valve voltage. ``stability margin [m]`` is the signed distance of
-the centre-of-mass projection to the support polygon of the feet carrying load (positive
-inside; NaN with no foot on the ground), the static stability margin of a crawl gait.
+and 2 with an open-loop valve voltage; its ``force set-point [N]`` is the cylinder force it
+tracks in a force-controlled stance (NaN under plain position control).
+``stability margin [m]`` is the signed distance of the centre-of-mass projection to the
+support polygon of the feet carrying load (positive inside; NaN with no foot on the
+ground), the static stability margin of a crawl gait.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from pneumaquad.layout import (
 )
 from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
 
-from .coupling import X_COMMANDED
+from .coupling import X_COMMANDED, X_FORCE_TRACKING
 from .simulation import RobotSimulation
 
 __all__ = ["JOINT_QUANTITIES", "recording_columns", "recording_row", "thorax_attitude"]
@@ -42,6 +44,7 @@ JOINT_QUANTITIES = (
     "force [N]",
     "air consumed [kg]",
     "control mode [-]",
+    "force set-point [N]",
 )
 _THORAX = ("thorax x [m]", "thorax y [m]", "thorax z [m]", "thorax roll [rad]",
            "thorax pitch [rad]", "thorax yaw [rad]")
@@ -100,6 +103,7 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
             s.outputs[:, O_PNEUMATIC_FORCE],
             s.state[:, S_AIR_CONSUMED],
             s.extra[:, X_COMMANDED],
+            np.where(s.extra[:, X_FORCE_TRACKING] > 0.0, s.force_reference, np.nan),
         ]
     ).ravel()
     thorax = np.concatenate([s.data.xpos[robot.thorax_id], thorax_attitude(s)])

@@ -232,8 +232,8 @@ def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: f
                     standing_angles: np.ndarray = STANDING_ANGLES) -> list[Phase]:
     """The quadruped stands up from lying on the ground, holds, then follows body commands.
 
-    ``standing_angles`` [rad] (alpha, beta, gamma, the same for every leg) is the pose it
-    stands up into.
+    ``standing_angles`` [rad] is the pose it stands up into: (alpha, beta, gamma) for every
+    leg, or one angle per joint (e.g. the first pose of a walk; no body commands then).
 
     Body commands (thorax height ±3 cm, roll ±5°, pitch ±5°, 2 s each) keep the feet where
     they stand and move the body: each leg's foot target in the thorax frame comes from
@@ -243,7 +243,9 @@ def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: f
     count = robot.joint_count
     legs = robot.legs
     lying = np.tile(LYING_ANGLES, len(legs))
-    standing = np.tile(standing_angles, len(legs))
+    standing_angles = np.asarray(standing_angles, dtype=float)
+    per_joint = standing_angles.size == count
+    standing = standing_angles if per_joint else np.tile(standing_angles, len(legs))
     placement = robot.parameters.placement
     rotation = euler_zyx_matrix(placement.rotation_zyx)
     height = resting_height(simulation, lying)
@@ -267,6 +269,9 @@ def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: f
     ]
     if not posture:
         return phases
+    if per_joint:
+        raise ValueError("body commands (posture=True) need one (alpha, beta, gamma) "
+                         "standing pose for all legs")
     height = standing_height(simulation, standing_angles)
     tables = [leg_dh_table(robot, leg) for leg in legs]
     feet_world = [

@@ -11,6 +11,7 @@ recording, gain scheduling and progress.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import mujoco
@@ -57,7 +58,9 @@ from .coupling import (
     N_SEAL,
     X_COMMANDED,
     X_FORCE_GAIN,
+    X_FORCE_STIFFNESS,
     X_FORCE_TAU,
+    X_FORCE_TRACKING,
 )
 from .errors import SimulationDivergedError
 from .stepping import MJ_STEP_ADDRESS, advance_chunk
@@ -168,7 +171,7 @@ class RobotSimulation:
         self.extra[:, X_FORCE_TAU] = [c.force_feedback_time_constant for c in controllers]
         self.extra[:, X_COMMANDED] = MODE_UNCOMMANDED
         self.pid_state = np.zeros((n, N_CONTROLLER_STATES))
-        self.force_mean = np.zeros(n)
+        self.force_reference = np.zeros(n)
         self.reference_angles = np.zeros(n)
         self.open_loop_voltage = self.params[:, P_OFFSET].copy()
         self.commands = self.params[:, P_OFFSET].copy()
@@ -277,7 +280,8 @@ class RobotSimulation:
             self.state[i] = initial_state(row, position, pressure, pressure)
         self.pid_state[:] = 0.0
         self.outputs[:] = 0.0
-        self.force_mean[:] = 0.0
+        self.force_reference[:] = 0.0
+        self.extra[:, X_FORCE_TRACKING] = 0.0
         self.reference_angles[:] = angles
 
     # --- commands --------------------------------------------------------------------
@@ -297,6 +301,43 @@ class RobotSimulation:
         """Hold the valves of ``joints`` at their offset (closed centre), uncommanded."""
         index = slice(None) if joints is None else joints
         self.extra[index, X_COMMANDED] = MODE_UNCOMMANDED
+
+    def track_forces(self, forces: np.ndarray, gain: float | np.ndarray,
+                     joints: np.ndarray | None = None, stiffness: float = 1.0) -> None:
+        """Add force tracking to the position control of ``joints`` (all by default).
+
+        Each cylinder then pushes with its set-point ``forces`` [N] plus a position spring
+        of stiffness ``stiffness``·Kp / ``gain`` and a damper ``stiffness``·Kd / ``gain``
+        (``gain`` [V/N] > 0; the PID's integral is off while it tracks):
+        ``voltage = PD + gain · (F_set − F)``. Set-points hold until changed;
+        :meth:`stop_force_tracking` returns to plain position control.
+        """
+        index = slice(None) if joints is None else joints
+        gains = np.broadcast_to(np.asarray(gain, dtype=float),
+                                self.extra[index, X_FORCE_TRACKING].shape)
+        if np.any(gains < 0.0) or not np.all(np.isfinite(gains)):
+            raise ValueError(f"force tracking gain must be finite and >= 0, got {gain!r}")
+        if not (math.isfinite(stiffness) and stiffness > 0.0):
+            raise ValueError(f"stance stiffness factor must be finite and > 0, got "
+                             f"{stiffness!r}")
+        self.force_reference[index] = forces
+        self.extra[index, X_FORCE_TRACKING] = gains
+        self.extra[index, X_FORCE_STIFFNESS] = stiffness
+
+    def stop_force_tracking(self, joints: np.ndarray | None = None) -> None:
+        """Plain position control (integral back on) for ``joints`` (all by default).
+
+        The force reference of a joint that was tracking restarts from its present force
+        (the low-pass mean that pressure feedback, if configured, works about)."""
+        selected = np.zeros(self.robot.joint_count, dtype=bool)
+        selected[slice(None) if joints is None else joints] = True
+        tracking = selected & (self.extra[:, X_FORCE_TRACKING] > 0.0)
+        self.extra[tracking, X_FORCE_TRACKING] = 0.0
+        self.force_reference[tracking] = self.outputs[tracking, O_PNEUMATIC_FORCE]
+
+    def force_tracking_gains(self) -> np.ndarray:
+        """Per joint: force tracking gain [V/N] (0: plain position control)."""
+        return self.extra[:, X_FORCE_TRACKING].copy()
 
     def control_modes(self) -> np.ndarray:
         """Per joint: 0 uncommanded, 1 closed loop, 2 open loop."""
@@ -328,7 +369,7 @@ class RobotSimulation:
             d.ten_length, d.ten_velocity, self.robot.tendon_id, self.robot.actuator_id, d.ctrl,
             self.model.tendon_frictionloss, self.model.tendon_damping, self.linkage, self.seal,
             self.mujoco_friction, self.params, self.state, self.supply, self.outputs,
-            self.gains, self.gain_scale, self.extra, self.pid_state, self.force_mean,
+            self.gains, self.gain_scale, self.extra, self.pid_state, self.force_reference,
             self.reference_angles, self.open_loop_voltage, self.commands, self.positions,
             self.velocities, self.reference_positions, self.control_step, self.substeps,
         )

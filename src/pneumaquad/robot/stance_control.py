@@ -1,26 +1,28 @@
-"""Stance control for walking: load sharing between the stance feet and body levelling.
+"""Force-controlled stance for walking: the stance legs share the load as statics asks.
 
-A quadruped on four position-controlled legs is statically indeterminate: a millimetre of
-leg-length error decides whether a foot carries its share of the weight or none of it, and
-stiff pneumatic joints (hundreds of newtons per cylinder against a 60 N robot) turn such
-errors into a body rocking on one diagonal pair of feet. The planned foot positions of the
-crawl gait are therefore corrected, every control chunk, by two slow loops on the vertical
-foot positions (body frame):
+A quadruped standing on four position-controlled legs is statically indeterminate: a
+millimetre of leg-length error decides whether a foot carries its share of the weight or
+none of it, and a leg that lifts throws its load onto the others at once. On the
+pneumatic legs, whose PID on piston position only builds force through position error,
+the robot then rocks onto diagonal pairs of feet, the unloaded corner sags, and the
+stance feet are pushed sideways.
 
-* **load sharing** — the desired normal force of each stance foot is the weighted
-  least-norm distribution of the measured total load that balances the centre of mass
-  (:func:`desired_normal_forces`); a leg about to lift and a leg just touched down get a
-  small weight (:func:`stance_weights`), so the load moves off a leg before it lifts.
-  The force errors are integrated into foot offsets (admittance, [m/(N·s)]) and only their
-  *twist* part is kept (:func:`twist_component`): the part that changes how the load is
-  shared without tilting or lifting the body.
-* **levelling** — the body's measured tilt is integrated into a plane of foot offsets
-  (the feet on the low side reach further down), so tracking errors and sloped ground do
-  not leave the body tilted.
+Here every stance leg is instead *told* its load, once per control chunk:
 
-The corrected foot positions become joint-angle corrections through the leg Jacobian at
-the planned angles (:func:`pneumaquad.robot.kinematics.foot_jacobian`), added to the
-planned joint references; offsets are a few millimetres, well inside the linear range.
+1. each leg's **load share** (:func:`load_shares`) rises from 0 just after touchdown and
+   falls back to 0 before lift-off, so the load moves off a leg before it lifts (the
+   gait's transfer gap, :attr:`pneumaquad.gait.crawl.CrawlGait.transfer_gap`, gives the
+   front legs four feet down for this);
+2. the desired **normal force** of each foot is the least-variation distribution of the
+   robot's weight that balances it about the measured centre of mass
+   (:func:`desired_normal_forces`);
+3. the **cylinder forces** that hold that foot force in statics follow through the leg's
+   Jacobian and the cylinders' moment arms (:func:`cylinder_forces_for_foot_force`);
+4. the cylinders **track** these forces (:meth:`.RobotSimulation.track_forces`: the valve
+   voltage gets ``k_F·(F_set − F)`` added and the PID's integral is off), so the position
+   loop only adds a spring of stiffness Kp / k_F about the planned foot position.
+
+A swinging leg (share 0) is under plain position control.
 """
 
 from __future__ import annotations
@@ -30,72 +32,66 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from pneumaquad.gait.crawl import CrawlGait, leg_phases, stance_flags
+from pneumaquad.gait.crawl import CrawlGait, leg_phases
 from pneumaquad.gait.stability import centre_of_mass
-from pneumaquad.gait.walk import WalkPlan, thorax_rotation
 
-from .legs import leg_dh_table, shift_feet
+from .feedback import foot_jacobian_world, leg_dof_addresses
+from .linkage import moment_arm
 from .simulation import RobotSimulation
 
-__all__ = ["StanceControlGains", "StanceController", "desired_normal_forces",
-           "stance_weights", "twist_component"]
+__all__ = ["StanceControlSettings", "StanceController", "cylinder_forces_for_foot_force",
+           "desired_normal_forces", "load_shares", "track_stance_loads"]
 
 Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class StanceControlGains:
-    """Gains of the stance control.
+class StanceControlSettings:
+    """Settings of the force-controlled stance.
 
     Attributes
     ----------
-    force_gain : float [m/(N·s)]
-        Foot offset speed per newton of normal-force error (load sharing).
-    attitude_gain : float [1/s]
-        Levelling: rate at which the measured tilt is taken into the foot plane.
-    height_gain : float [1/s]
-        Rate at which the error of the body's height above its stance feet is taken into
-        a common foot offset (the legs sag under the load of a lifted leg).
-    offset_limit : float [m]
-        Largest foot offset either loop may command.
-    transfer : float
-        Cycle fraction over which a leg's weight rises after touchdown and falls before
-        lift-off (load transfer).
-    swing_decay : float [s]
-        Time constant with which a swinging leg's load-sharing offset returns to zero.
-    force_filter : float [s]
-        Time constant of the first-order low-pass filter on the measured foot forces
-        (contact forces of stiff pneumatic legs chatter at tens of hertz).
+    force_gain : float [V/N]
+        Valve voltage per newton of cylinder force error (force tracking gain k_F). The
+        position loop then acts as a spring of Kp / k_F: with beta's Kp = 150 V/m and
+        0.01 V/N, 15 N/mm at the piston.
+    rise : float
+        Cycle fraction over which a leg's load share rises after touchdown.
+    fall : float
+        Cycle fraction over which it falls before lift-off.
     """
 
-    force_gain: float = 4e-4
-    attitude_gain: float = 2.0
-    height_gain: float = 2.0
-    offset_limit: float = 0.03
-    transfer: float = 0.08
-    swing_decay: float = 0.2
-    force_filter: float = 0.05
+    force_gain: float = 0.01
+    rise: float = 0.01
+    fall: float = 0.04
+    stiffness: float = 2.0
+
+    def __post_init__(self) -> None:
+        if not self.force_gain > 0.0:
+            raise ValueError(f"force_gain must be > 0 V/N, got {self.force_gain!r}")
+        if not (0.0 < self.rise < 0.5 and 0.0 < self.fall < 0.5):
+            raise ValueError(f"rise and fall must be cycle fractions in (0, 0.5), got "
+                             f"{self.rise!r} and {self.fall!r}")
 
 
-def stance_weights(phases: ArrayLike, duty_factor: float, transfer: float) -> Array:
-    """Load-sharing weight in [0, 1] of each leg at its gait phase.
+def load_shares(phases: ArrayLike, duty_factor: float, rise: float, fall: float) -> Array:
+    """Load share in [0, 1] of each leg at its gait phase.
 
     Parameters
     ----------
     phases : array_like (..., legs)
         Cycle fraction since the leg's lift-off, in [0, 1) (:func:`.crawl.leg_phases`).
     duty_factor : float
-        Stance fraction β; the leg swings for phases below 1 − β (weight 0).
-    transfer : float
-        Cycle fraction of the linear rise after touchdown and of the fall before lift-off.
+        Stance fraction β; the leg swings for phases below 1 − β (share 0).
+    rise, fall : float
+        Cycle fractions of the linear rise after touchdown and of the linear fall that
+        ends at lift-off.
     """
     phase = np.asarray(phases, dtype=float)
     touchdown = 1.0 - duty_factor
-    if transfer <= 0.0:
-        return (phase >= touchdown).astype(float)
-    rise = (phase - touchdown) / transfer
-    fall = (1.0 - phase) / transfer
-    return np.clip(np.minimum(rise, fall), 0.0, 1.0)
+    rising = (phase - touchdown) / rise
+    falling = (1.0 - phase) / fall
+    return np.clip(np.minimum(rising, falling), 0.0, 1.0)
 
 
 def desired_normal_forces(feet_xy: ArrayLike, com_xy: ArrayLike, total_load: float,
@@ -127,116 +123,107 @@ def desired_normal_forces(feet_xy: ArrayLike, com_xy: ArrayLike, total_load: flo
     return forces
 
 
-def twist_component(offsets: ArrayLike, feet_xy: ArrayLike, mask: ArrayLike) -> Array:
-    """The part of the vertical foot ``offsets`` [m] that does not move or tilt the body.
+def cylinder_forces_for_foot_force(jacobian: ArrayLike, bias_torques: ArrayLike,
+                                   moment_arms: ArrayLike, foot_force: ArrayLike) -> Array:
+    """Cylinder forces [N] that hold a leg in statics with ``foot_force`` on its foot.
 
-    Among the feet in ``mask`` the least-squares plane a + b·x + c·y through the offsets
-    (which would lift and tilt the body) is removed; with three feet or fewer nothing is
-    left. Feet outside ``mask`` get 0.
+    The leg's joint torques must balance the gravity (and velocity) torques and the
+    ground's push on the foot: ``τ = bias − Jᵀ f``; each cylinder gives τᵢ = rᵢ·Fᵢ with
+    rᵢ = d(cylinder length)/d(joint angle), so ``Fᵢ = τᵢ / rᵢ``.
+
+    Parameters
+    ----------
+    jacobian : (3, joints) [m/rad]
+        Foot position Jacobian w.r.t. the leg's joints, in the frame of ``foot_force``.
+    bias_torques : (joints,) [N·m]
+        MuJoCo's ``qfrc_bias`` at the leg's joints (gravity of the leg's links).
+    moment_arms : (joints,) [m]
+        Cylinder moment arms (:func:`.linkage.moment_arm`), non-zero.
+    foot_force : (3,) [N]
+        Force the ground exerts on the foot.
     """
-    offsets = np.asarray(offsets, dtype=float)
-    mask = np.asarray(mask, dtype=bool)
-    result = np.zeros_like(offsets)
-    if mask.sum() <= 3:
-        return result
-    feet = np.asarray(feet_xy, dtype=float)[mask, :2]
-    plane = np.column_stack([np.ones(len(feet)), feet])
-    coefficients = np.linalg.lstsq(plane, offsets[mask], rcond=None)[0]
-    result[mask] = offsets[mask] - plane @ coefficients
-    return result
+    torques = np.asarray(bias_torques, dtype=float) - np.asarray(jacobian, dtype=float).T @ (
+        np.asarray(foot_force, dtype=float))
+    return torques / np.asarray(moment_arms, dtype=float)
+
+
+def track_stance_loads(simulation: RobotSimulation, shares: ArrayLike,
+                       force_gain: float, stiffness: float = 1.0) -> Array:
+    """Set every leg's cylinders to carry its statics share of the robot's weight.
+
+    The desired normal forces (:func:`desired_normal_forces`, weights ``shares`` (legs,),
+    the whole robot's weight about its measured centre of mass) become each leg's
+    cylinder force set-points (:func:`cylinder_forces_for_foot_force`, vertical foot force,
+    the leg's Jacobian and gravity torques at the present state), tracked with
+    ``force_gain`` [V/N]; legs of share 0 return to plain position control.
+
+    Returns the desired normal forces (legs,) [N].
+    """
+    robot, model, data = simulation.robot, simulation.model, simulation.data
+    weight = float(model.body_mass.sum() * np.linalg.norm(model.opt.gravity))
+    shares = np.asarray(shares, dtype=float)
+    normal = desired_normal_forces(simulation.foot_positions(), centre_of_mass(model, data),
+                                   weight, shares)
+    angles = simulation.joint_angles()
+    for leg, name in enumerate(robot.legs):
+        joints = robot.joint_names.index(f"{name}_alpha") + np.arange(3)
+        if shares[leg] <= 0.0:
+            simulation.stop_force_tracking(joints)
+            continue
+        dofs = leg_dof_addresses(robot, name)
+        jacobian = foot_jacobian_world(model, data, int(robot.foot_site_id[leg]), dofs)
+        arms = np.array([moment_arm(robot.linkages[robot.joint_types[j]], angles[j])
+                         for j in joints])
+        forces = cylinder_forces_for_foot_force(jacobian, data.qfrc_bias[dofs], arms,
+                                                np.array([0.0, 0.0, normal[leg]]))
+        simulation.track_forces(forces, force_gain, joints, stiffness)
+    return normal
 
 
 class StanceController:
-    """Walking references with load sharing and levelling, one call per control chunk.
+    """Force-controlled stance while walking: references pass through, forces are set.
+
+    Call it like a reference function, once per control chunk (a feedback phase): it sets
+    the force set-points of every stance leg from the simulation's present state
+    (:func:`track_stance_loads` with the gait's :func:`load_shares`) and returns
+    ``references(times)`` unchanged.
 
     Parameters
     ----------
     simulation : RobotSimulation
-        Read (foot forces, feet, centre of mass, thorax attitude) at every call.
+        Read (feet, centre of mass, Jacobians, joint angles) and commanded (force set-points)
+        at every call.
     gait : CrawlGait
-        The gait ``plan`` was made from.
-    plan : WalkPlan
-        Planned joint references at the control rate (:func:`.gait.walk.plan_walk`).
+        The gait being walked (leg phases).
     start : float [s]
-        Simulation time of the plan's first row.
-    gains : StanceControlGains
+        Simulation time of the gait's t = 0.
+    references : callable
+        ``f(times) -> (len(times), joints)`` planned joint angles [rad].
+    settings : StanceControlSettings
     """
 
-    def __init__(self, simulation: RobotSimulation, gait: CrawlGait, plan: WalkPlan,
-                 start: float, gains: StanceControlGains | None = None) -> None:
+    def __init__(self, simulation: RobotSimulation, gait: CrawlGait, start: float,
+                 references, settings: StanceControlSettings | None = None) -> None:
         self.simulation = simulation
         self.gait = gait
-        self.plan = plan
         self.start = start
-        self.gains = gains or StanceControlGains()
-        robot = simulation.robot
-        self.tables = [leg_dh_table(robot, leg) for leg in robot.legs]
-        self.to_thorax = thorax_rotation(robot).T  # body → thorax frame
-        self.load_offsets = np.zeros(len(robot.legs))  # [m] down = positive
-        self.tilt = np.zeros(2)  # [m/m] levelling plane slopes along body x, y
-        self.lift = 0.0  # [m] common offset of the height loop
-        self.forces: Array | None = None  # [N] filtered foot normal forces
-        self.last_time: float | None = None
+        self.references = references
+        self.settings = settings or StanceControlSettings()
+        #: Rows of (time [s], load shares (legs), desired normal forces (legs) [N]).
         self.log: list[Array] = []
 
-    def _rows(self, times: Array) -> Array:
-        step = self.simulation.control_step
-        index = np.clip(np.round((times - self.start) / step).astype(int), 0,
-                        len(self.plan.references) - 1)
-        return self.plan.references[index]
-
-    def _body_to_world(self) -> Array:
-        data, robot = self.simulation.data, self.simulation.robot
-        return data.xmat[robot.thorax_id].reshape(3, 3) @ self.to_thorax
-
-    def update(self, interval: float) -> Array:
-        """Integrate both loops over ``interval`` [s]; return the foot offsets (legs,) [m]
-        (positive = foot further down in the body frame)."""
-        simulation, gains = self.simulation, self.gains
-        time = simulation.time - self.start
-        phases = leg_phases(self.gait, np.array([time]))[0]
-        weights = stance_weights(phases, self.gait.duty_factor, gains.transfer)
-        planned = stance_flags(self.gait, np.array([time]))[0]
-        measured = simulation.foot_normal_forces()
-        if self.forces is None:
-            self.forces = measured
-        else:
-            blend = 1.0 - np.exp(-interval / gains.force_filter)
-            self.forces = self.forces + blend * (measured - self.forces)
-        forces = self.forces
-        feet_world = simulation.foot_positions()
-        com = centre_of_mass(simulation.model, simulation.data)
-        desired = desired_normal_forces(feet_world, com, float(forces.sum()), weights)
-        body_feet = self.plan.cycle.feet[0] @ self.to_thorax  # body-frame feet (any sample)
-        error = np.where(planned, desired - forces, 0.0)
-        self.load_offsets += gains.force_gain * error * interval
-        self.load_offsets = np.where(
-            planned, twist_component(self.load_offsets, body_feet, planned),
-            self.load_offsets * np.exp(-interval / gains.swing_decay),
-        )
-        body_to_world = self._body_to_world()
-        self.tilt += gains.attitude_gain * interval * body_to_world[2, :2]
-        limit = gains.offset_limit
-        self.tilt = np.clip(self.tilt, -1.0, 1.0)
-        loaded = planned & (forces > 0.0)
-        if np.any(loaded):
-            thorax = simulation.data.xpos[simulation.robot.thorax_id]
-            height = thorax[2] - feet_world[loaded, 2].mean()
-            planned_height = -body_feet[loaded, 2].mean()
-            self.lift = float(np.clip(
-                self.lift + gains.height_gain * interval * (planned_height - height),
-                -limit, limit))
-        plane = -(body_feet[:, :2] @ self.tilt)
-        offsets = np.clip(self.load_offsets + plane + self.lift, -limit, limit)
-        self.log.append(np.concatenate([[simulation.time], forces, desired, offsets]))
-        return offsets
+    def update(self) -> Array:
+        """Set the force set-points for the present state; return the desired normal
+        forces (legs,) [N]."""
+        simulation, settings = self.simulation, self.settings
+        phases = leg_phases(self.gait, np.array([simulation.time - self.start]))[0]
+        shares = load_shares(phases, self.gait.duty_factor, settings.rise, settings.fall)
+        normal = track_stance_loads(simulation, shares, settings.force_gain,
+                                    settings.stiffness)
+        self.log.append(np.concatenate([[simulation.time], shares, normal]))
+        return normal
 
     def __call__(self, times: np.ndarray) -> np.ndarray:
-        """Joint references (len(times), joints) [rad] for the next chunk."""
-        interval = 0.0 if self.last_time is None else self.simulation.time - self.last_time
-        self.last_time = self.simulation.time
-        offsets = self.update(interval)
-        rows = self._rows(np.asarray(times, dtype=float))
-        down = np.zeros((len(offsets), 3))
-        down[:, 2] = -offsets
-        return shift_feet(rows, self.tables, down @ self.to_thorax.T)
+        """Planned joint references (len(times), joints) [rad] for the next chunk."""
+        self.update()
+        return self.references(times)

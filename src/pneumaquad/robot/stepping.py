@@ -86,7 +86,7 @@ def advance_chunk(
     gain_scale,
     extra,
     pid_state,
-    force_mean,
+    force_reference,
     reference_angles,
     open_loop_voltage,
     commands,
@@ -110,7 +110,7 @@ def advance_chunk(
         robot_control_step(
             tendon_length, tendon_velocity, tendon_ids, actuator_ids, control,
             tendon_frictionloss, tendon_damping, linkage, seal, mujoco_friction, params,
-            state, supply, outputs, gains, gain_scale, extra, pid_state, force_mean,
+            state, supply, outputs, gains, gain_scale, extra, pid_state, force_reference,
             reference_angles, open_loop_voltage, commands, positions, velocities,
             reference_positions, control_step, substeps,
         )

@@ -1,16 +1,18 @@
 """The quadruped walking with the crawl gait on its 12 pneumatic joints.
 
-:func:`walking_phases` stands the robot up (:func:`.scenarios.stand_up_phases`), moves it
-to the walking pose, then plays the lateral-sequence wave gait of
-:mod:`pneumaquad.gait` (duty factor ≥ 0.75, body sway to a planned static margin) as
-joint references; :func:`walking_outcome` judges the run honestly: how far the robot
-went, whether it fell, slipped, hit a joint limit, or lost static stability.
+:func:`walking_phases` stands the robot up (:func:`.scenarios.stand_up_phases`) into the
+first pose of the lateral-sequence wave gait of :mod:`pneumaquad.gait` (duty factor ≥ 0.75,
+body sway to a planned static margin, a start-up cycle from the symmetric stance), then
+plays the gait as joint references, with a force-controlled stance
+(:mod:`.stance_control`) and swing and heading corrections; :func:`walking_outcome`
+judges the run honestly: how far the robot went, whether it fell, slipped, hit a joint
+limit, or lost static stability.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -23,7 +25,7 @@ from .experiment import Phase
 from .heading_control import HeadingHold
 from .scenarios import stand_up_phases
 from .simulation import RobotSimulation
-from .stance_control import StanceControlGains, StanceController
+from .stance_control import StanceController, StanceControlSettings
 from .swing_control import SwingHeightCorrection
 
 __all__ = ["WALKING_ANGLES", "WalkSettings", "contact_slide", "gait_support_margins",
@@ -38,19 +40,23 @@ WALKING_ANGLES = np.radians([0.0, -20.0, 80.0])
 class WalkSettings:
     """Gait settings: speed [m/s], heading [rad], duty factor, period [s], step height
     [m], planned minimum static margin [m], distance to walk [m], the swing's share of
-    pure lift and lowering (:class:`pneumaquad.gait.crawl.CrawlGait`), and the stance
-    control gains (None: play the planned joint angles as they are). Defaults: the
-    slow, long-cycle gait that rocked least in our measurements (docs/robot.md)."""
+    pure lift and lowering and the four-legged transfer gap before each front lift-off
+    (cycle fractions, :class:`pneumaquad.gait.crawl.CrawlGait`), the force-controlled
+    stance (None: plain position control of the planned joint angles) and the swing and
+    heading corrections. Defaults: the settings that walked every terrain in our
+    measurements (docs/robot.md)."""
 
     speed: float = 0.02
     heading: float = 0.0
     duty_factor: float = 0.9
     period: float = 8.0
     step_height: float = 0.04
-    minimum_margin: float = 0.04
+    minimum_margin: float = 0.06
     distance: float = 1.0
-    lift_fraction: float = 0.0
-    stance_control: StanceControlGains | None = None
+    lift_fraction: float = 0.25
+    transfer_gap: float = 0.04
+    stance_control: StanceControlSettings | None = field(
+        default_factory=StanceControlSettings)
     swing_from_ground: bool = True
     heading_hold: bool = True
 
@@ -63,10 +69,8 @@ class WalkSettings:
 def walking_phases(
     simulation: RobotSimulation, settings: WalkSettings
 ) -> tuple[list[Phase], WalkPlan]:
-    """Stand up, go to the walking pose, walk; returns the phases and the gait plan."""
+    """Stand up into the gait's first pose, walk, stop; returns the phases and the plan."""
     robot = simulation.robot
-    phases = stand_up_phases(simulation, hold=1.0, posture=False)
-    standing = np.asarray(phases[-1].references, dtype=float)
     gait = robot_gait(
         robot,
         speed=settings.speed,
@@ -77,19 +81,17 @@ def walking_phases(
         angles=WALKING_ANGLES,
         minimum_margin=settings.minimum_margin,
         lift_fraction=settings.lift_fraction,
+        transfer_gap=settings.transfer_gap,
+        start_up=True,
     )
     duration = settings.duration()
     plan = plan_walk(robot, gait, duration)
     closed = np.ones(robot.joint_count, dtype=bool)
-    ramp_start = sum(phase.duration for phase in phases)
-    first = plan.references[0]
-
-    def to_walking_pose(times: np.ndarray) -> np.ndarray:
-        fraction = np.clip((times - ramp_start) / 1.5, 0.0, 1.0)[:, None]
-        smooth = fraction * fraction * (3.0 - 2.0 * fraction)
-        return standing + smooth * (first - standing)
-
-    walk_start = ramp_start + 2.0
+    # Stand up straight into the gait's first pose, the symmetric stance of its start-up
+    # (a separate move from a standing pose to the walking pose dragged the feet).
+    phases = stand_up_phases(simulation, hold=3.0, posture=False,
+                             standing_angles=plan.references[0])
+    walk_start = sum(phase.duration for phase in phases)
     step = simulation.control_step
 
     def walk(times: np.ndarray) -> np.ndarray:
@@ -99,7 +101,7 @@ def walking_phases(
 
     references = walk
     if settings.stance_control is not None:
-        references = StanceController(simulation, gait, plan, walk_start,
+        references = StanceController(simulation, gait, walk_start, references,
                                       settings.stance_control)
     if settings.swing_from_ground:
         references = SwingHeightCorrection(simulation, gait, walk_start, references)
@@ -109,7 +111,6 @@ def walking_phases(
                 or settings.heading_hold)
     walking = Phase("walk", duration, references, closed, feedback=feedback)
     phases += [
-        Phase("to walking pose", 2.0, to_walking_pose, closed),
         walking,
         Phase("stop", 1.0, plan.references[-1], closed),
     ]
