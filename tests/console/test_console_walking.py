@@ -51,8 +51,13 @@ def test_automatic_walking_steps_forward_without_falling(app: ConsoleApp):
     assert end[0] - start[0] > 0.02  # forward
     assert end[2] > 0.25  # standing, not fallen
     assert "automatic" in app.walking.status()
+    # the legs on the ground track their share of the weight, a swinging one does not
+    gains = app.simulation.force_tracking_gains().reshape(4, 3)
+    shares = app.walking.crawl.load_shares()
+    assert np.all((gains[:, 0] > 0.0) == (shares > 0.0))
     app.set_walking("off")
     assert app.teleop.enabled
+    assert np.all(app.simulation.force_tracking_gains() == 0.0)  # position control again
 
 
 def test_shared_walking_places_the_front_foot_at_the_stylus(app: ConsoleApp):

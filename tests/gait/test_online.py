@@ -92,3 +92,31 @@ def test_shared_control_front_foot_goes_to_the_operator_and_the_rear_follows():
     assert crawl.footholds[rear_left][0] == pytest.approx(NEUTRAL[rear_left, 0] + 0.08)
     assert np.allclose(crawl.footholds[:, 0], NEUTRAL[:, 0] + 0.08)
     assert 0.04 < crawl.body[0] < 0.12  # the body follows the feet (plus its sway)
+
+
+def test_load_shares_unload_the_next_leg_before_it_lifts_and_load_the_landed_one():
+    crawl = OnlineCrawl(NEUTRAL, np.zeros(2), np.zeros(2))
+    crawl.command_velocity(0.015, 0.0)
+    first = LEGS.index(crawl.leg)  # rear_left
+    assert np.all(crawl.load_shares() == 1.0)  # start of the shift: all carry
+    crawl.advance(crawl.settings.shift_time - 0.2)
+    shares = crawl.load_shares(unload_time=0.4)
+    assert shares[first] == pytest.approx(0.5) and np.delete(shares, first).min() == 1.0
+    _run(crawl, 0.4)  # lifted
+    assert crawl.phase == "swing" and crawl.load_shares()[first] == 0.0
+    while crawl.phase == "swing":
+        crawl.advance(STEP)
+    assert crawl.landed == LEGS[first] and crawl.load_shares()[first] == 0.0  # touchdown
+    crawl.advance(0.04)
+    assert crawl.load_shares(load_time=0.08)[first] == pytest.approx(0.5)
+
+
+def test_the_body_path_does_not_run_away_from_the_feet():
+    settings = OnlineCrawlSettings()
+    crawl = OnlineCrawl(NEUTRAL, np.zeros(2), np.zeros(2), settings)
+    crawl.command_velocity(0.2, 0.0)  # ten times what the feet can step
+    for _ in range(round(30.0 / STEP)):
+        crawl.advance(STEP)
+        centre = (crawl.footholds - NEUTRAL[:, :2]).mean(axis=0)
+        assert np.linalg.norm(crawl.reference - centre) <= 0.5 * settings.max_reach + 1e-9
+    assert crawl.steps_taken >= 12 and crawl.reference[0] > 0.2  # still walks forward

@@ -17,12 +17,15 @@ def _stand_with_a_leg_length_error(error_degrees: float, shares: np.ndarray | No
                                    seal_friction: bool = True):
     """Stand, then command front_left beta ``error_degrees`` off the standing pose for 3 s;
     with ``shares`` the stance legs track their load. Returns (measured, desired) [N]."""
-    from pneumaquad.console.app import initial_pose
+    from pneumaquad.robot.scenarios import STANDING_ANGLES, standing_height
 
     sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
     if not seal_friction:
         sim.seal[:, [F_STATIC, F_COULOMB]] = 0.0
-    pose = initial_pose(sim)
+    pose = np.tile(STANDING_ANGLES, 4)  # gamma 90°: legs nearly upright under the hips
+    height = standing_height(sim, STANDING_ANGLES) + 0.003
+    sim.set_pose(pose, thorax_position=np.array([0.0, 0.0, height]))
+    sim.command_angles(pose)
     sim.step(1000)
     reference = pose.copy()
     reference[sim.robot.joint_names.index("front_left_beta")] += np.radians(error_degrees)

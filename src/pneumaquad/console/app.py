@@ -29,8 +29,9 @@ from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.feedback import FootFeedback, foot_feedback
-from pneumaquad.robot.scenarios import STANDING_ANGLES, standing_height
+from pneumaquad.robot.scenarios import standing_height
 from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.walking import WALKING_ANGLES
 
 from .devices import DeviceLink, DeviceServer
 from .gui import ConsoleControls
@@ -48,13 +49,14 @@ _DROP_CLEARANCE = 0.003
 def initial_pose(simulation: RobotSimulation) -> np.ndarray:
     """Put ``simulation`` in the console's reset pose; return its joint angles [rad].
 
-    Every leg at the standing angles of :mod:`pneumaquad.robot.scenarios`; a free robot
-    is placed with its feet just above flat ground; all joints closed-loop at that pose.
+    Every leg at the walking angles of :mod:`pneumaquad.robot.walking` (the neutral
+    stance of the crawl, with room to step and sway); a free robot is placed with its
+    feet just above flat ground; all joints closed-loop at that pose.
     """
     robot = simulation.robot
-    angles = np.tile(STANDING_ANGLES, len(robot.legs))
+    angles = np.tile(WALKING_ANGLES, len(robot.legs))
     if robot.free:
-        height = standing_height(simulation, STANDING_ANGLES) + _DROP_CLEARANCE
+        height = standing_height(simulation, WALKING_ANGLES) + _DROP_CLEARANCE
         simulation.set_pose(angles, thorax_position=np.array([0.0, 0.0, height]))
     else:
         simulation.set_pose(angles)

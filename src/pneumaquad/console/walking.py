@@ -12,9 +12,12 @@ Modes:
 Before each chunk, :meth:`ConsoleWalking.before_chunk` advances the crawl by the chunk's
 duration, refusing a lift that the *measured* state would not support
 (:func:`pneumaquad.gait.crawl.refuse_lift` with the measured feet of the legs the crawl
-has on the ground and the whole robot's measured centre of mass), and commands all
-twelve joints through the leg IK (clamped into the
-limits). The feet are planned in world-aligned axes and turned into the body frame with
+has on the ground and the whole robot's measured centre of mass), commands all twelve
+joints through the leg IK (clamped into the limits) and, like the CLI walk, sets the
+stance legs' cylinders to carry their statics share of the weight
+(:func:`pneumaquad.robot.stance_control.track_stance_loads` with the crawl's
+:meth:`~pneumaquad.gait.online.OnlineCrawl.load_shares`: a leg sheds its load before it
+lifts). The feet are planned in world-aligned axes and turned into the body frame with
 the thorax's measured yaw.
 """
 
@@ -33,6 +36,7 @@ from pneumaquad.robot.leg_ik import exact_solutions
 from pneumaquad.robot.legs import leg_dh_table
 from pneumaquad.robot.recording import thorax_attitude
 from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.stance_control import StanceControlSettings, track_stance_loads
 from pneumaquad.robot.walking import WALKING_ANGLES
 
 __all__ = ["WALKING_MODES", "ConsoleWalking", "reach"]
@@ -40,6 +44,8 @@ __all__ = ["WALKING_MODES", "ConsoleWalking", "reach"]
 WALKING_MODES = ("off", "automatic", "shared")
 #: Fastest commanded body speed [m/s].
 MAX_SPEED = 0.05
+#: The force-controlled stance of the console's crawl (that of ``pneumaquad robot walk``).
+DEFAULT_STANCE = StanceControlSettings()
 
 
 def reach(table: DHTable, target: np.ndarray, current: np.ndarray,
@@ -74,12 +80,17 @@ class ConsoleWalking:
     simulation : RobotSimulation
         A free quadruped (other configurations cannot walk: the mode stays ``off``).
     settings : OnlineCrawlSettings, optional
+    stance : StanceControlSettings or None, optional
+        Force-controlled stance while walking (the CLI walk's default); None: plain
+        position control of every leg.
     """
 
     def __init__(self, simulation: RobotSimulation,
-                 settings: OnlineCrawlSettings | None = None) -> None:
+                 settings: OnlineCrawlSettings | None = None,
+                 stance: StanceControlSettings | None = DEFAULT_STANCE) -> None:
         self.simulation = simulation
         self.settings = settings or OnlineCrawlSettings()
+        self.stance = stance
         robot = simulation.robot
         self.available = robot.free and tuple(robot.legs) == LEGS
         self.mode = "off"
@@ -101,6 +112,7 @@ class ConsoleWalking:
         self.mode = mode
         if mode == "off":
             self.crawl = None
+            self.simulation.stop_force_tracking()
             return
         if self.crawl is None:
             simulation = self.simulation
@@ -162,6 +174,9 @@ class ConsoleWalking:
             current = angles[3 * k : 3 * k + 3]
             angles[3 * k : 3 * k + 3] = reach(table, target, current)
         simulation.command_angles(angles)
+        if self.stance is not None:
+            track_stance_loads(simulation, crawl.load_shares(), self.stance.force_gain,
+                               self.stance.stiffness)
 
     def status(self) -> str:
         """Markdown lines: mode, next leg and phase, planned margin, refusal, steps."""

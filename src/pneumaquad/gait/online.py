@@ -59,6 +59,12 @@ class OnlineCrawlSettings:
     idle_distance : float [m]
         With no velocity (automatic) or in shared control, a foot within this distance
         of its target does not step.
+    max_reach : float [m]
+        Automatic mode: largest distance of a foothold from the leg's neutral foothold
+        about the body as it stands during the swing (farther footholds are pulled in:
+        a leg asked to land beyond its workspace lands where its clamped joints put it,
+        and the body lurches). It also bounds the speed: the body's path stays within
+        half of it from the feet.
     """
 
     shift_time: float = 1.0
@@ -67,6 +73,7 @@ class OnlineCrawlSettings:
     minimum_margin: float = 0.04
     max_step: float = 0.15
     idle_distance: float = 0.01
+    max_reach: float = 0.08
 
 
 def _smoothstep(fraction: float) -> float:
@@ -158,6 +165,7 @@ class OnlineCrawl:
         self.refusal = ""
         self.steps_taken = 0
         self.retries = 0
+        self.landed: str | None = None  # the leg that touched down at this shift's start
         self._plan_shift()
 
     # --- commands ------------------------------------------------------------------
@@ -196,6 +204,12 @@ class OnlineCrawl:
         length = float(np.linalg.norm(step))
         if length > self.settings.max_step:
             target = self.footholds[k] + step * (self.settings.max_step / length)
+        if not self.shared:  # the operator's footholds are the operator's to choose
+            neutral = self.body + self.neutral[k, :2]
+            offset = target - neutral
+            reach = float(np.linalg.norm(offset))
+            if reach > self.settings.max_reach:
+                target = neutral + offset * (self.settings.max_reach / reach)
         return target
 
     def _plan_shift(self, retry: bool = False) -> None:
@@ -225,6 +239,14 @@ class OnlineCrawl:
         self.clock += interval
         if not self.shared and not self.refusal:
             self.reference = self.reference + self.velocity * interval
+            # the body's path never runs more than half a reach ahead of where the feet
+            # stand: commanded faster than the feet can step, the crawl walks as fast as
+            # they can (a path that ran away would pull the body off its support)
+            centre = (self.footholds - self.neutral[:, :2]).mean(axis=0)
+            lead = self.reference - centre
+            distance = float(np.linalg.norm(lead))
+            if distance > 0.5 * s.max_reach:
+                self.reference = centre + lead * (0.5 * s.max_reach / distance)
         if self.phase == "shift":
             fraction = _smoothstep(self.clock / s.shift_time)
             self.body = self.shift_from + fraction * (self.shift_to - self.shift_from)
@@ -245,6 +267,7 @@ class OnlineCrawl:
                 return
             self.refusal = ""
             self.phase = "swing"
+            self.landed = None
             self.swing_from = self.footholds[k].copy()
             self.swing_to = target
         else:
@@ -255,6 +278,7 @@ class OnlineCrawl:
             self.clock = 0.0
             self.footholds[LEGS.index(self.leg)] = self.swing_to
             self.steps_taken += 1
+            self.landed = self.leg
             self._next_leg()
 
     def _next_leg(self) -> None:
@@ -282,6 +306,23 @@ class OnlineCrawl:
             feet[k, :2] = point[:2] - self.body
             feet[k, 2] += point[2]
         return feet
+
+    def load_shares(self, unload_time: float = 0.4, load_time: float = 0.08) -> Array:
+        """(4,) share in [0, 1] of the load each leg should carry now (for a force-controlled
+        stance, :func:`pneumaquad.robot.stance_control.track_stance_loads`): 0 for the
+        swinging leg; the leg about to lift sheds its load over the last ``unload_time``
+        [s] of the shift before it; the leg that just touched down takes load over the
+        first ``load_time`` [s] of the next shift."""
+        shares = np.ones(len(LEGS))
+        k = LEGS.index(self.leg)
+        if self.phase == "swing":
+            shares[k] = 0.0
+            return shares
+        remaining = self.settings.shift_time - self.clock
+        shares[k] = float(np.clip(remaining / unload_time, 0.0, 1.0))
+        if self.landed is not None and self.landed != self.leg:
+            shares[LEGS.index(self.landed)] = float(np.clip(self.clock / load_time, 0.0, 1.0))
+        return shares
 
     def margin(self) -> float:
         """Planned static margin [m] now (the feet on the ground, planned body)."""

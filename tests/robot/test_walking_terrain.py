@@ -1,0 +1,38 @@
+"""The quadruped walks each terrain of the issue with the default gait (slow: 1-2 minutes of
+simulation each). Success is judged by :func:`pneumaquad.robot.walking.walking_outcome`:
+no fall, static margin negative less than 5 % of the time, stance feet sliding less than
+10 cm per metre, no joint stuck at a limit, at least 90 % of the distance."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from pneumaquad.params import load_robot
+from pneumaquad.robot.builder import build_robot
+from pneumaquad.robot.experiment import run_phases
+from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.walking import (
+    WalkSettings,
+    tip_over_series,
+    walking_outcome,
+    walking_phases,
+)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("environment", "distance"),
+                         [("flat", 1.0), ("ramp", 1.6), ("rough", 2.8)])
+def test_the_quadruped_walks_the_terrain(tmp_path: Path, environment: str,
+                                         distance: float) -> None:
+    robot = build_robot(load_robot("crr-quadruped"), "quadruped", environment=environment)
+    sim = RobotSimulation(robot)
+    settings = WalkSettings(distance=distance)
+    phases, plan = walking_phases(sim, settings)
+    run = run_phases(sim, phases, tmp_path, f"walk-{environment}")
+    tip_over = tip_over_series(run.recording, run.summary, robot, plan)
+    outcome = walking_outcome(run.recording, run.summary, settings, robot, tip_over)
+    assert outcome["success"], outcome
+    assert outcome["time with negative tip-over margin [%]"] < 1.0
+    assert outcome["air per metre [NL/m]"] < 10.0  # measured 6.5-7.2 NL/m
