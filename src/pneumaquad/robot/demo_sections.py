@@ -138,7 +138,9 @@ def _walk(folder: Path, report: Report) -> None:
     verdict = "success" if outcome["success"] else "failure"
     report.add(
         "Quadruped: crawl gait (lateral-sequence wave gait, duty factor 0.9)",
-        "Two 8 s cycles at 20 mm/s on flat ground, judged by the criteria of docs/robot.md: "
+        "Two 8 s cycles at 20 mm/s on flat ground (the first a start-up from the symmetric "
+        "stance), with the force-controlled stance: each stance leg's cylinders carry the "
+        "share of the weight statics gives it. Judged by the criteria of docs/robot.md: "
         f"{verdict} ({', '.join(outcome['reasons'])}). The tip-over margin uses the feet "
         "the gait holds down, the recorded margin the feet carrying load; the difference is "
         "the robot rocking onto diagonal pairs of feet. `pneumaquad robot walk` walks 1 m, "
