@@ -79,7 +79,7 @@ def pid_loop(count, gains, pid_state, references, positions, dt):
 def control_loop(
     count, ten_length, ten_velocity, tendon_ids, actuator_ids, ctrl, frictionloss, damping,
     linkage, seal, mujoco_friction, params, state, supply, outputs, gains, gain_scale, extra,
-    pid_state, force_mean, reference_angles, open_loop_voltage, commands, positions,
+    pid_state, force_reference, reference_angles, open_loop_voltage, commands, positions,
     velocities, reference_positions, dt, substeps,
 ):  # fmt: skip
     """``count`` calls of the whole control step (no MuJoCo step) from compiled code."""
@@ -87,7 +87,7 @@ def control_loop(
         robot_control_step(
             ten_length, ten_velocity, tendon_ids, actuator_ids, ctrl, frictionloss, damping,
             linkage, seal, mujoco_friction, params, state, supply, outputs, gains, gain_scale,
-            extra, pid_state, force_mean, reference_angles, open_loop_voltage, commands,
+            extra, pid_state, force_reference, reference_angles, open_loop_voltage, commands,
             positions, velocities, reference_positions, dt, substeps,
         )  # fmt: skip
 
@@ -178,7 +178,7 @@ def time_control_step(sim: RobotSimulation, steps: int) -> float:
         d.ctrl.copy(), m.tendon_frictionloss.copy(), m.tendon_damping.copy(), sim.linkage,
         sim.seal, sim.mujoco_friction, sim.params, sim.state.copy(), sim.supply.copy(),
         sim.outputs.copy(), sim.gains, sim.gain_scale, sim.extra, sim.pid_state.copy(),
-        sim.force_mean.copy(), sim.reference_angles.copy(), sim.open_loop_voltage.copy(),
+        sim.force_reference.copy(), sim.reference_angles.copy(), sim.open_loop_voltage.copy(),
         sim.commands.copy(), sim.positions.copy(), sim.velocities.copy(),
         sim.reference_positions.copy(), sim.control_step, sim.substeps,
     )  # fmt: skip

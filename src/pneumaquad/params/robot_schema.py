@@ -193,6 +193,9 @@ class ContactParameters(_Model):
     body_friction: Annotated[Number, Ge(0)] = 1.0
     time_constant: Annotated[Time, Gt(0)] = 0.005
     damping_ratio: Annotated[Number, Gt(0)] = 1.0
+    #: MuJoCo ``impratio``: impedance of the friction rows relative to the normal ones
+    #: (elliptic cones); above 1 a loaded contact creeps less under tangential force.
+    friction_impedance_ratio: Annotated[Number, Ge(1)] = 1.0
 
 
 class EnvironmentParameters(_Model):

@@ -400,6 +400,7 @@ def build_robot(
     # Elliptic friction cones: with the pyramidal default and ground friction 5 the feet
     # sank about 2 cm into the ground; elliptic cones keep it near 0.15 mm.
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.impratio = p.contact.friction_impedance_ratio
     spec.compiler.degree = False
     _add_visual_assets(spec)
     add_environment(spec, environment, p.environment, p.contact, seed)
