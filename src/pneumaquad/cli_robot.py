@@ -273,7 +273,12 @@ def robot_walk(
                             swing_from_ground=swing_from_ground,
                             heading_hold=heading_hold, stance_control=stance)
     simulation = _simulation(params, overrides, "quadruped", environment, seed)
-    phases, plan = walking_phases(simulation, settings)
+    try:
+        phases, plan = walking_phases(simulation, settings)
+    except ValueError as error:  # settings the gait cannot meet (no sway window, margin)
+        raise typer.BadParameter(f"the gait cannot be planned: {error}",
+                                 param_hint="--duty-factor, --margin or --transfer-gap"
+                                 ) from None
     folder = _run(simulation, phases, output, f"walk-{environment}",
                   f"quadruped: walk {distance:g} m on {environment}", video)
     from pneumaquad.recording import read_recording

@@ -146,6 +146,20 @@ def test_cli_robot_geometry_and_export(tmp_path: Path) -> None:
     assert mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "ramp") >= 0
 
 
+@pytest.mark.parametrize(("arguments", "message"), [
+    (["--transfer-gap", "0.3"], "leaves none"),  # duty 0.9: no window left for the sway
+    (["--duty-factor", "0.76"], "does not fit"),  # the default gap 0.04 > 2·0.76 − 1.5
+    (["--duty-factor", "0.75", "--transfer-gap", "0"], "four-legged phases"),
+])
+def test_cli_walk_refuses_gaits_that_cannot_be_planned(tmp_path: Path, arguments: list[str],
+                                                      message: str) -> None:
+    result = runner.invoke(app, ["robot", "walk", "--no-video", "-o", str(tmp_path / "w"),
+                                 *arguments])
+    assert result.exit_code == 2
+    assert message in " ".join(result.output.split())
+    assert "Traceback" not in result.output
+
+
 def test_cli_leg_validate_writes_a_run_folder(tmp_path: Path) -> None:
     out = tmp_path / "run"
     result = runner.invoke(

@@ -123,6 +123,10 @@ class CrawlGait:
             raise ValueError(f"transfer gap {self.transfer_gap} must be in "
                              f"[0, {2.0 * self.duty_factor - 1.5:.3g}] (2β − 1.5): a side's "
                              "two swings and the gap must fit in half a cycle")
+        if self.sway != 0.0 and side >= 0.5 - 1e-12:
+            raise ValueError(f"body sway needs four-legged phases: with duty factor "
+                             f"{self.duty_factor} a transfer gap of {self.transfer_gap} "
+                             "leaves none")
 
     @property
     def speed(self) -> float:
