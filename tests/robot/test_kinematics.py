@@ -249,6 +249,20 @@ def test_jacobian_matches_finite_differences(model):
     assert foot_jacobian(model, angles[0]).shape == (3, 3)
 
 
+@pytest.mark.parametrize("seed", range(5))
+def test_single_leg_compiled_chain_equals_the_batched_kinematics(seed):
+    # one set of angles takes the compiled path, a batch the NumPy one: the same numbers
+    generator = np.random.default_rng(200 + seed)
+    table = _random_table(generator, table1_structure=seed % 2 == 0)
+    angles = generator.uniform(-np.pi, np.pi, size=(20, 3))
+    batch_feet = forward_kinematics_dh(table, angles)
+    batch_jacobians = foot_jacobian(table, angles)
+    for k in range(len(angles)):
+        assert forward_kinematics_dh(table, angles[k]) == pytest.approx(batch_feet[k],
+                                                                         abs=1e-14)
+        assert foot_jacobian(table, angles[k]) == pytest.approx(batch_jacobians[k], abs=1e-14)
+
+
 def test_invalid_geometry_is_rejected_with_clear_messages():
     good = {"joint_points": np.zeros((3, 3)), "joint_axes": np.eye(3),
             "foot_point": np.ones(3), "lower_limits": -np.ones(3), "upper_limits": np.ones(3)}
