@@ -165,14 +165,11 @@ def robot_control_step(
             voltage = pid_update(
                 scaled, pid_state[i], reference_positions[i], positions[i], control_step
             )
-            force_gain = extra[i, X_FORCE_GAIN]
-            if tracking > 0.0:
-                force_error = force_reference[i] - outputs[i, O_PNEUMATIC_FORCE]
-                voltage += tracking * force_error
-                voltage = min(max(voltage, scaled[G_UMIN]), scaled[G_UMAX])
-            elif force_gain > 0.0:
-                deviation = outputs[i, O_PNEUMATIC_FORCE] - force_reference[i]
-                voltage -= force_gain * deviation
+            # one force term for both uses of force_reference: the set-point (tracking)
+            # or the low-pass mean (pressure feedback)
+            force_gain = tracking if tracking > 0.0 else extra[i, X_FORCE_GAIN]
+            if force_gain > 0.0:
+                voltage += force_gain * (force_reference[i] - outputs[i, O_PNEUMATIC_FORCE])
                 voltage = min(max(voltage, scaled[G_UMIN]), scaled[G_UMAX])
             commands[i] = voltage
         elif mode == MODE_OPEN_LOOP:
