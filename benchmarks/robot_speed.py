@@ -80,7 +80,7 @@ def control_loop(
     count, ten_length, ten_velocity, tendon_ids, actuator_ids, ctrl, frictionloss, damping,
     linkage, seal, mujoco_friction, params, state, supply, outputs, gains, gain_scale, extra,
     pid_state, force_reference, reference_angles, open_loop_voltage, commands, positions,
-    velocities, reference_positions, dt, substeps,
+    velocities, reference_positions, coupling, dt, substeps,
 ):  # fmt: skip
     """``count`` calls of the whole control step (no MuJoCo step) from compiled code."""
     for _ in range(count):
@@ -88,7 +88,7 @@ def control_loop(
             ten_length, ten_velocity, tendon_ids, actuator_ids, ctrl, frictionloss, damping,
             linkage, seal, mujoco_friction, params, state, supply, outputs, gains, gain_scale,
             extra, pid_state, force_reference, reference_angles, open_loop_voltage, commands,
-            positions, velocities, reference_positions, dt, substeps,
+            positions, velocities, reference_positions, coupling, dt, substeps,
         )  # fmt: skip
 
 
@@ -180,7 +180,8 @@ def time_control_step(sim: RobotSimulation, steps: int) -> float:
         sim.outputs.copy(), sim.gains, sim.gain_scale, sim.extra, sim.pid_state.copy(),
         sim.force_reference.copy(), sim.reference_angles.copy(), sim.open_loop_voltage.copy(),
         sim.commands.copy(), sim.positions.copy(), sim.velocities.copy(),
-        sim.reference_positions.copy(), sim.control_step, sim.substeps,
+        sim.reference_positions.copy(), np.ones_like(sim.coupling), sim.control_step,
+        sim.substeps,
     )  # fmt: skip
     start = time.perf_counter()
     control_loop(steps, *args)

@@ -440,6 +440,13 @@ def finish_outputs(p, s, position, control_step, out):
     out[O_CAP_FLOW] /= control_step
     out[O_ROD_FLOW] /= control_step
     out[O_SUPPLY_DRAW] /= control_step
+    state_outputs(p, s, position, out)
+
+
+@compiled
+def state_outputs(p, s, position, out):
+    """Pneumatic force [N] (eq 4.1.11) and chamber temperatures [K] of the state ``s`` with
+    the piston at ``position`` [m], into ``out``."""
     out[O_PNEUMATIC_FORCE] = piston_force(
         s[S_CAP_PRESSURE],
         s[S_ROD_PRESSURE],

@@ -120,7 +120,8 @@ class ActuatorSide:
             self._control, self._frictionloss, self._damping, s.linkage, s.seal, True,
             s.params, s.state, s.supply, s.outputs, s.gains, s.gain_scale, s.extra,
             s.pid_state, s.force_reference, s.reference_angles, s.open_loop_voltage, s.commands,
-            s.positions, s.velocities, s.reference_positions, s.control_step, s.substeps,
+            s.positions, s.velocities, s.reference_positions, s.coupling, s.control_step,
+            s.substeps,
         )
         self.steps_taken += 1
         return self._control.copy()

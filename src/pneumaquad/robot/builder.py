@@ -401,6 +401,9 @@ def build_robot(
     # sank about 2 cm into the ground; elliptic cones keep it near 0.15 mm.
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     spec.option.impratio = p.contact.friction_impedance_ratio
+    # A diverging state stops the run with an error (robot.simulation) instead of
+    # MuJoCo's silent reset to the initial state, which would make time jump back.
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
     spec.compiler.degree = False
     _add_visual_assets(spec)
     add_environment(spec, environment, p.environment, p.contact, seed)

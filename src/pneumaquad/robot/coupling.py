@@ -1,10 +1,24 @@
-"""Compiled control step of the robot: controllers, pneumatic kernel, forces to MuJoCo.
+"""Compiled control step of the robot: actuator sampling, controllers, forces to MuJoCo.
 
-One call per control step does, for all cylinders at once: read piston positions and
-velocities from MuJoCo's tendon lengths and velocities, turn joint-angle references into
-piston references through the linkage (eq 5.2.1-5.2.6), run the PID controllers (valve
-voltage out), advance every actuator with :func:`pneumaquad.kernel.step_actuators`, and
-write the cylinder forces into ``data.ctrl`` and the seal friction into the model.
+The coupling is sampled at the instant the cylinder forces act. Each control step runs
+between MuJoCo's two step halves (``mj_step1``: kinematics at the present joint angles;
+``mj_step2``: forces, accelerations, integration), in two parts, for all cylinders at once:
+
+1. :func:`sample_actuators` reads every piston position and velocity from the present
+   tendon lengths and velocities and brings the chambers to the present instant: the
+   pneumatic kernel (:func:`pneumaquad.kernel.step_actuators`) integrates the last
+   interval along the straight piston path from the previous sample to the present one,
+   so the chamber volumes it integrates end exactly at the volumes MuJoCo's motion gives
+   (a closed chamber keeps P·V^n). The pneumatic force is that of the present state.
+2. :func:`control_actuators` turns joint-angle references into piston references through
+   the linkage (eq 5.2.1-5.2.6), runs the PID controllers (valve voltage out, held until
+   the next sample) and writes the cylinder forces into ``data.ctrl`` and the seal
+   friction into the tendons.
+
+The force over a step is the one of the state at the step's start and the piston motion
+over the step is MuJoCo's own (a symplectic-Euler exchange): a lossless air spring keeps
+its energy. Sampling the pistons after ``mj_step`` instead reads tendon lengths computed
+before the last integration, one step old, which feeds energy into the legs.
 No Python loop over actuators.
 """
 
@@ -27,14 +41,19 @@ from pneumaquad.control.pid import (
 from pneumaquad.jit import compiled
 from pneumaquad.kernel import step_actuators
 from pneumaquad.layout import (
-    O_FRICTION_FORCE,
     O_PNEUMATIC_FORCE,
     P_OFFSET,
     P_STROKE,
     S_BRISTLE,
+    S_CAP_MASS,
+    S_CAP_PRESSURE,
+    S_POSITION,
+    S_ROD_MASS,
+    S_ROD_PRESSURE,
+    S_VELOCITY,
 )
 from pneumaquad.physics.friction import stribeck_curve
-from pneumaquad.pneumatics import friction_slope_of
+from pneumaquad.pneumatics import friction_of, friction_slope_of, state_outputs
 
 # Per-joint linkage rows: l1, l3, γ0, l2, direction (see pneumaquad.robot.linkage).
 L_CHILD = 0
@@ -64,6 +83,11 @@ MODE_UNCOMMANDED = 0.0
 MODE_CLOSED_LOOP = 1.0
 MODE_OPEN_LOOP = 2.0
 
+# Coupling flags (one small int array per simulation).
+K_PENDING = 0  # 1: the chambers are one interval behind the present kinematics
+K_FRESH = 1  # 1: MuJoCo's position and velocity stages ran for the present state
+N_COUPLING = 2
+
 
 @compiled
 def piston_from_angle(linkage_row, angle: float) -> float:
@@ -90,8 +114,68 @@ def set_seal_friction(seal, tendon_ids, tendon_velocity, tendon_frictionloss, te
 
 
 @compiled
-def robot_control_step(
+def sample_actuators(
     tendon_length,
+    tendon_velocity,
+    tendon_ids,
+    linkage,
+    params,
+    state,
+    supply,
+    outputs,
+    commands,
+    positions,
+    velocities,
+    coupling,
+    control_step: float,
+    substeps: int,
+) -> int:
+    """Read the pistons from the present kinematics and bring the chambers up to date.
+
+    ``positions`` [m] (clipped to the stroke) and ``velocities`` [m/s] are filled from
+    the tendons. Where ``coupling[K_PENDING]`` is set, the chambers advance over the last
+    ``control_step`` [s] with the valve ``commands`` [V] held, the piston moving linearly
+    from its previous sample (``state[:, S_POSITION]``) to the present one; else only the
+    force and temperatures of the present state are filled. ``outputs`` then holds the
+    pneumatic force and chamber temperatures of the present instant and the mean flows
+    of the last interval.
+
+    Returns
+    -------
+    int
+        -1 when every actuator state is finite, else the index of the first cylinder
+        whose piston or chambers are not.
+    """
+    count = params.shape[0]
+    for i in range(count):
+        tendon = tendon_ids[i]
+        x = tendon_length[tendon] - linkage[i, L_RETRACTED]
+        positions[i] = min(max(x, 0.0), params[i, P_STROKE])
+        velocities[i] = tendon_velocity[tendon]
+    if coupling[K_PENDING] != 0:
+        for i in range(count):
+            state[i, S_VELOCITY] = (positions[i] - state[i, S_POSITION]) / control_step
+        step_actuators(params, state, commands, state[:, S_POSITION], state[:, S_VELOCITY],
+                       control_step, substeps, supply, outputs)
+        coupling[K_PENDING] = 0
+    else:
+        for i in range(count):
+            state_outputs(params[i], state[i], positions[i], outputs[i])
+    bad = -1
+    for i in range(count):
+        state[i, S_POSITION] = positions[i]
+        s = state[i]
+        if bad < 0 and not (
+            math.isfinite(positions[i]) and math.isfinite(velocities[i])
+            and math.isfinite(s[S_CAP_PRESSURE]) and math.isfinite(s[S_ROD_PRESSURE])
+            and math.isfinite(s[S_CAP_MASS]) and math.isfinite(s[S_ROD_MASS])
+        ):
+            bad = i
+    return bad
+
+
+@compiled
+def control_actuators(
     tendon_velocity,
     tendon_ids,
     actuator_ids,
@@ -103,7 +187,6 @@ def robot_control_step(
     mujoco_friction: bool,
     params,
     state,
-    supply,
     outputs,
     gains,
     gain_scale,
@@ -117,17 +200,20 @@ def robot_control_step(
     velocities,
     reference_positions,
     control_step: float,
-    substeps: int,
-):
-    """Advance controllers and actuators by one control step and set MuJoCo's inputs.
+) -> None:
+    """Controllers and cylinder forces for the interval that starts now.
 
     Arrays are per cylinder (index i) unless noted; MuJoCo arrays are indexed through
-    ``tendon_ids`` / ``actuator_ids``. ``commands``, ``positions``, ``velocities`` and
-    ``reference_positions`` are filled for recording. ``gain_scale`` multiplies the PID
-    gains (the gain-scheduling hook writes it). With ``mujoco_friction`` the seal
-    friction becomes the tendon's dry friction (Stribeck breakaway at the current speed)
-    and viscous damping; otherwise the actuator file's force law is applied through the
-    motor, its slope as tendon damping so MuJoCo's implicit integrator treats it stably.
+    ``tendon_ids`` / ``actuator_ids``. Reads the present ``positions``, ``velocities``
+    and ``outputs`` of :func:`sample_actuators`; fills ``commands`` [V] (held until the
+    next sample) and ``reference_positions`` [m]. ``gain_scale`` multiplies the PID gains
+    (the gain-scheduling hook writes it). With ``mujoco_friction`` the seal friction
+    becomes the tendon's dry friction (the Stribeck breakaway at the present speed, used
+    from MuJoCo's next constraint build on) and viscous damping; otherwise the actuator
+    file's force law is applied through the motor, its slope as tendon damping so
+    MuJoCo's implicit integrator treats it stably (the damping force MuJoCo already
+    computed for this step with the previous slope is added back to the motor force, so
+    the explicit force is exactly the friction law's).
 
     ``force_reference`` [N] is per cylinder either the low-pass mean of its pneumatic
     force (pressure feedback: ``voltage -= X_FORCE_GAIN · (F − mean)``, a damping term)
@@ -141,11 +227,7 @@ def robot_control_step(
     count = params.shape[0]
     scaled = np.empty(N_GAINS)
     for i in range(count):
-        tendon = tendon_ids[i]
         stroke = params[i, P_STROKE]
-        x = tendon_length[tendon] - linkage[i, L_RETRACTED]
-        positions[i] = min(max(x, 0.0), stroke)
-        velocities[i] = tendon_velocity[tendon]
         mode = extra[i, X_COMMANDED]
         if mode == MODE_CLOSED_LOOP:
             target = piston_from_angle(linkage[i], reference_angles[i])
@@ -178,9 +260,6 @@ def robot_control_step(
         else:
             reference_positions[i] = positions[i]
             commands[i] = params[i, P_OFFSET]
-    step_actuators(
-        params, state, commands, positions, velocities, control_step, substeps, supply, outputs
-    )
     for i in range(count):
         tendon = tendon_ids[i]
         force = outputs[i, O_PNEUMATIC_FORCE]
@@ -192,7 +271,59 @@ def robot_control_step(
             set_seal_friction(seal, tendon_ids, tendon_velocity, tendon_frictionloss,
                               tendon_damping, i)
         else:
-            slope = max(friction_slope_of(params[i], v, state[i, S_BRISTLE]), 0.0)
-            tendon_damping[tendon] = slope
-            force += slope * v - outputs[i, O_FRICTION_FORCE]
+            applied_damping = tendon_damping[tendon]  # in MuJoCo's passive force already
+            force += applied_damping * v - friction_of(params[i], v, state[i, S_BRISTLE])
+            tendon_damping[tendon] = max(friction_slope_of(params[i], v, state[i, S_BRISTLE]),
+                                         0.0)
         control[actuator_ids[i]] = force
+
+
+@compiled
+def robot_control_step(
+    tendon_length,
+    tendon_velocity,
+    tendon_ids,
+    actuator_ids,
+    control,
+    tendon_frictionloss,
+    tendon_damping,
+    linkage,
+    seal,
+    mujoco_friction: bool,
+    params,
+    state,
+    supply,
+    outputs,
+    gains,
+    gain_scale,
+    extra,
+    pid_state,
+    force_reference,
+    reference_angles,
+    open_loop_voltage,
+    commands,
+    positions,
+    velocities,
+    reference_positions,
+    coupling,
+    control_step: float,
+    substeps: int,
+) -> int:
+    """One control step at the present kinematics: :func:`sample_actuators`, then
+    :func:`control_actuators`; marks the chambers as owing the interval that follows.
+
+    Returns the index of a cylinder whose state went non-finite, else -1 (see
+    :func:`sample_actuators`).
+    """
+    bad = sample_actuators(
+        tendon_length, tendon_velocity, tendon_ids, linkage, params, state, supply, outputs,
+        commands, positions, velocities, coupling, control_step, substeps,
+    )
+    control_actuators(
+        tendon_velocity, tendon_ids, actuator_ids, control, tendon_frictionloss,
+        tendon_damping, linkage, seal, mujoco_friction, params, state, outputs, gains,
+        gain_scale, extra, pid_state, force_reference, reference_angles, open_loop_voltage,
+        commands, positions, velocities, reference_positions, control_step,
+    )
+    coupling[K_PENDING] = 1
+    return bad

@@ -1,7 +1,14 @@
 """Errors of robot runs, importable without loading MuJoCo."""
 
+from __future__ import annotations
+
 __all__ = ["SimulationDivergedError"]
 
 
 class SimulationDivergedError(RuntimeError):
-    """MuJoCo met a non-finite or huge acceleration (it would silently reset the state)."""
+    """The coupled state went non-finite or huge (MuJoCo's unstable-state warnings, or a
+    cylinder's piston or chambers); the run stops at ``time`` [s] instead of resetting."""
+
+    def __init__(self, message: str, time: float = float("nan")) -> None:
+        super().__init__(message)
+        self.time = time

@@ -1,10 +1,11 @@
 """The coupled simulation: a MuJoCo robot whose joints are driven by pneumatic cylinders.
 
 :class:`RobotSimulation` holds the MuJoCo model and data, the packed actuator arrays of
-all cylinders and their controllers. Each control step (default 1 ms) reads every piston
-position and velocity from the cylinder tendons, advances all controllers and actuators
-in one compiled call (the pneumatic kernel sub-stepped inside), applies the cylinder
-forces and steps MuJoCo. Chunks of steps run inside compiled code
+all cylinders and their controllers. Each control step (default 1 ms) computes MuJoCo's
+kinematics of the present state (``mj_step1``), reads every piston position and velocity
+from the cylinder tendons, brings the chambers to the present instant, runs all
+controllers, applies the cylinder forces and completes MuJoCo's step (``mj_step2``), in
+one compiled call (:mod:`pneumaquad.robot.coupling`). Chunks of steps run inside compiled code
 (:mod:`pneumaquad.robot.stepping`); Python sees the state between chunks, for
 recording, gain scheduling and progress.
 """
@@ -45,6 +46,8 @@ from .coupling import (
     F_STATIC,
     F_STRIBECK_VELOCITY,
     F_VISCOUS,
+    K_FRESH,
+    K_PENDING,
     L_CHILD,
     L_DIRECTION,
     L_GAMMA_ZERO,
@@ -53,6 +56,7 @@ from .coupling import (
     MODE_CLOSED_LOOP,
     MODE_OPEN_LOOP,
     MODE_UNCOMMANDED,
+    N_COUPLING,
     N_EXTRA,
     N_LINKAGE,
     N_SEAL,
@@ -61,21 +65,38 @@ from .coupling import (
     X_FORCE_STIFFNESS,
     X_FORCE_TAU,
     X_FORCE_TRACKING,
+    set_seal_friction,
 )
 from .errors import SimulationDivergedError
-from .stepping import MJ_STEP_ADDRESS, advance_chunk
+from .stepping import (
+    MJ_STEP1_ADDRESS,
+    MJ_STEP2_ADDRESS,
+    MJ_STEP_ADDRESS,
+    STATUS_ACTUATOR,
+    STATUS_MUJOCO,
+    advance_chunk,
+)
 
 __all__ = [
     "RobotSimulation",
     "SimulationDivergedError",
     "seal_friction_row",
     "stance_swing_schedule",
+    "unstable_quantities",
 ]
 
 
 GainSchedule = Callable[["RobotSimulation"], np.ndarray]
 
 _NO_TABLE = np.zeros((0, 1))
+
+
+def _step_addresses(model: mujoco.MjModel) -> np.ndarray:
+    """``mj_step1``, the second half, ``mj_step``: the second half is ``mj_step2``, or for
+    RK4 (which ``mj_step2`` does not integrate) a whole ``mj_step`` from the same state."""
+    second = MJ_STEP_ADDRESS if model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4 \
+        else MJ_STEP2_ADDRESS
+    return np.array([MJ_STEP1_ADDRESS, second, MJ_STEP_ADDRESS], dtype=np.uint64)
 
 
 def seal_friction_row(actuator: ActuatorParameters) -> np.ndarray:
@@ -119,6 +140,33 @@ def stance_swing_schedule(
     return schedule
 
 
+
+
+_WARNING_QUANTITIES = {
+    mujoco.mjtWarning.mjWARN_BADQPOS: "joint positions (qpos)",
+    mujoco.mjtWarning.mjWARN_BADQVEL: "joint velocities (qvel)",
+    mujoco.mjtWarning.mjWARN_BADQACC: "joint accelerations (qacc)",
+    mujoco.mjtWarning.mjWARN_BADCTRL: "cylinder forces (ctrl)",
+}
+
+
+def unstable_quantities(data: mujoco.MjData) -> str:
+    """The quantities MuJoCo warned about, e.g. ``"joint accelerations (qacc)"``."""
+    named = [name for warning, name in _WARNING_QUANTITIES.items()
+             if data.warning[warning].number > 0]
+    return " and ".join(named) or "the state"
+
+
+def _bad_actuator_quantity(simulation: RobotSimulation, cylinder: int) -> str:
+    """Which of a cylinder's piston and chamber values is not finite."""
+    values = {
+        "piston position": simulation.positions[cylinder],
+        "piston velocity": simulation.velocities[cylinder],
+        "cap pressure": simulation.state[cylinder, S_CAP_PRESSURE],
+        "rod pressure": simulation.state[cylinder, S_ROD_PRESSURE],
+    }
+    named = [name for name, value in values.items() if not math.isfinite(value)]
+    return " and ".join(named) or "the chamber mass"
 
 
 class RobotSimulation:
@@ -179,6 +227,8 @@ class RobotSimulation:
         self.velocities = np.zeros(n)
         self.reference_positions = np.zeros(n)
         self.state = np.zeros((n, N_STATES))
+        self.coupling = np.zeros(N_COUPLING, dtype=np.int64)
+        self._step_addresses = _step_addresses(robot.model)
         self.gain_schedule: GainSchedule | None = None
         self._tibia_leg = {
             mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
@@ -190,6 +240,7 @@ class RobotSimulation:
                 controller.stance_gain_scale, controller.swing_gain_scale
             )
         self.steps_taken = 0
+        self.divergences = 0  # runs of step() that stopped on a diverged state
         self.set_pose(np.clip(np.zeros(n), robot.lower_limits(), robot.upper_limits()))
         self.step(0)  # compile (or load from the cache) before any timing starts
 
@@ -280,6 +331,13 @@ class RobotSimulation:
             self.state[i] = initial_state(row, position, pressure, pressure)
         self.pid_state[:] = 0.0
         self.outputs[:] = 0.0
+        self.coupling[K_PENDING] = 0  # the chambers start at the present instant
+        self.coupling[K_FRESH] = 1  # mj_forward above
+        if self.mujoco_friction:  # the breakaway level at rest for the first step
+            for index in range(robot.joint_count):
+                set_seal_friction(self.seal, robot.tendon_id, self.data.ten_velocity,
+                                  self.model.tendon_frictionloss, self.model.tendon_damping,
+                                  index)
         self.force_reference[:] = 0.0
         self.extra[:, X_FORCE_TRACKING] = 0.0
         self.reference_angles[:] = angles
@@ -363,23 +421,35 @@ class RobotSimulation:
         table = _NO_TABLE if reference_table is None else reference_table
         d = self.data
         start = self.time
-        advance_chunk(
-            MJ_STEP_ADDRESS, count, self.model._address, d._address, self.physics_steps, table,
-            reference_start,
+        done, status, cylinder = advance_chunk(
+            self._step_addresses, count, self.model._address, d._address, self.physics_steps,
+            d.warning.number, table, reference_start,
             d.ten_length, d.ten_velocity, self.robot.tendon_id, self.robot.actuator_id, d.ctrl,
             self.model.tendon_frictionloss, self.model.tendon_damping, self.linkage, self.seal,
             self.mujoco_friction, self.params, self.state, self.supply, self.outputs,
             self.gains, self.gain_scale, self.extra, self.pid_state, self.force_reference,
             self.reference_angles, self.open_loop_voltage, self.commands, self.positions,
-            self.velocities, self.reference_positions, self.control_step, self.substeps,
+            self.velocities, self.reference_positions, self.coupling, self.control_step,
+            self.substeps,
         )
-        self.steps_taken += count
-        if d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0:
-            end = start + count * self.control_step
+        self.steps_taken += done
+        if status == STATUS_MUJOCO:
+            self.divergences += 1
             raise SimulationDivergedError(
-                f"the simulation diverged between t = {start:.4g} s and {end:.4g} s "
-                "(non-finite or huge joint accelerations; MuJoCo reset the state); try a "
-                "smaller simulation.control_step, more substeps or softer contacts"
+                f"the simulation diverged between t = {start:.4g} s and {self.time:.4g} s: "
+                f"{unstable_quantities(d)} went non-finite or huge in MuJoCo (the run "
+                "stops here; what was recorded before is kept); try a smaller "
+                "simulation.control_step, more substeps or softer contacts",
+                time=self.time,
+            )
+        if status == STATUS_ACTUATOR:
+            self.divergences += 1
+            raise SimulationDivergedError(
+                f"the simulation diverged at t = {self.time:.4g} s: "
+                f"{_bad_actuator_quantity(self, cylinder)} of cylinder "
+                f"{self.robot.joint_names[cylinder]} went non-finite (the run stops here; "
+                "what was recorded before is kept)",
+                time=self.time,
             )
 
     # --- readouts --------------------------------------------------------------------

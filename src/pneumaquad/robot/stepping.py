@@ -1,11 +1,18 @@
 """The stepping loop of the coupled simulation, compiled, with MuJoCo called from inside.
 
-``mj_step`` is looked up in MuJoCo's shared library through ``ctypes`` and called from a
-numba loop with the raw ``mjModel*``/``mjData*`` addresses, so a chunk of control steps
-runs without returning to Python: one call per chunk instead of two Python calls per
-step. The function address is a run-time argument, called through a small intrinsic
-(an ``inttoptr`` cast), so the loop holds no process-specific constant and numba's
-on-disk cache works for it like for the rest of the package.
+Each control step is ``mj_step1`` (kinematics, contacts and velocities of the present
+state), the control step of :mod:`pneumaquad.robot.coupling` on those, then ``mj_step2``
+(forces, accelerations, integration), and ``mj_step`` for any further physics steps of
+the control step. A chunk ends with ``mj_step1`` and the actuators brought to the end
+time, so between chunks MuJoCo's derived quantities, the piston positions and the chamber
+states all belong to the same instant.
+
+``mj_step1``, ``mj_step2`` and ``mj_step`` are looked up in MuJoCo's shared library
+through ``ctypes`` and called from a numba loop with the raw ``mjModel*``/``mjData*``
+addresses, so a chunk of control steps runs without returning to Python. The function
+addresses are run-time arguments, called through a small intrinsic (an ``inttoptr``
+cast), so the loop holds no process-specific constant and numba's on-disk cache works
+for it like for the rest of the package.
 """
 
 from __future__ import annotations
@@ -15,34 +22,62 @@ import glob
 import os
 
 import mujoco
+import numpy as np
 from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
 from pneumaquad.jit import compiled
 
-from .coupling import robot_control_step
+from .coupling import K_FRESH, robot_control_step, sample_actuators
 
-__all__ = ["MJ_STEP_ADDRESS", "advance_chunk", "mujoco_step_function"]
+__all__ = [
+    "MJ_STEP1_ADDRESS",
+    "MJ_STEP2_ADDRESS",
+    "MJ_STEP_ADDRESS",
+    "STATUS_ACTUATOR",
+    "STATUS_MUJOCO",
+    "STATUS_OK",
+    "UNSTABLE_WARNINGS",
+    "advance_chunk",
+    "mujoco_step_function",
+]
+
+#: Chunk outcomes returned by :func:`advance_chunk`.
+STATUS_OK = 0
+STATUS_MUJOCO = 1  # MuJoCo warned of a non-finite or huge qpos, qvel, qacc or ctrl
+STATUS_ACTUATOR = 2  # a cylinder's piston or chamber state went non-finite
+
+#: MuJoCo warnings that mean the simulation is unstable (indices into ``data.warning``).
+UNSTABLE_WARNINGS = np.array([
+    int(mujoco.mjtWarning.mjWARN_BADQPOS), int(mujoco.mjtWarning.mjWARN_BADQVEL),
+    int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADCTRL),
+])
 
 
-def _load_mj_step():
+def _mujoco_library() -> ctypes.CDLL:
     folder = os.path.dirname(mujoco.__file__)
     candidates = sorted(glob.glob(os.path.join(folder, "libmujoco.so*"))) + sorted(
         glob.glob(os.path.join(folder, "libmujoco*.dylib"))
     )
     if not candidates:
         raise RuntimeError(f"MuJoCo's shared library was not found in {folder}")
-    library = ctypes.CDLL(candidates[0])
-    function = library.mj_step
+    return ctypes.CDLL(candidates[0])
+
+
+def _step_function(library: ctypes.CDLL, name: str):
+    function = getattr(library, name)
     function.argtypes = [ctypes.c_uint64, ctypes.c_uint64]
     function.restype = None
     return function
 
 
-mujoco_step_function = _load_mj_step()
-#: Address of ``mj_step(const mjModel*, mjData*)`` in this process.
+_library = _mujoco_library()
+mujoco_step_function = _step_function(_library, "mj_step")
+#: Addresses of ``mj_step``, ``mj_step1`` and ``mj_step2(const mjModel*, mjData*)``.
 MJ_STEP_ADDRESS = ctypes.cast(mujoco_step_function, ctypes.c_void_p).value
+MJ_STEP1_ADDRESS = ctypes.cast(_step_function(_library, "mj_step1"), ctypes.c_void_p).value
+MJ_STEP2_ADDRESS = ctypes.cast(_step_function(_library, "mj_step2"), ctypes.c_void_p).value
 
 
 @intrinsic
@@ -60,12 +95,21 @@ def _call_step(typing_context, function_address, model_address, data_address):
 
 
 @compiled
+def _unstable(warning_counts, baseline) -> bool:
+    for k in range(UNSTABLE_WARNINGS.shape[0]):
+        if warning_counts[UNSTABLE_WARNINGS[k]] != baseline[k]:
+            return True
+    return False
+
+
+@compiled
 def advance_chunk(
-    step_address: int,
+    step_addresses,
     step_count: int,
     model_address: int,
     data_address: int,
     physics_steps: int,
+    warning_counts,
     reference_table,
     reference_start: int,
     tendon_length,
@@ -93,26 +137,61 @@ def advance_chunk(
     positions,
     velocities,
     reference_positions,
+    coupling,
     control_step: float,
     substeps: int,
 ):
-    """Run ``step_count`` control steps: controllers + actuators, then MuJoCo steps.
+    """Run ``step_count`` control steps, then bring MuJoCo and the actuators to the end.
 
+    ``step_addresses`` holds the addresses of ``mj_step1``, ``mj_step2`` and ``mj_step``.
     Row ``reference_start + k`` of ``reference_table`` (clamped to its last row) is the
     joint-angle reference of step k; an empty table keeps ``reference_angles`` as set.
+    ``warning_counts`` is MuJoCo's ``data.warning.number``; a new unstable-state warning
+    (MuJoCo's automatic reset must be disabled) or a non-finite actuator state stops the
+    chunk.
+
+    Returns
+    -------
+    (int, int, int)
+        Control steps completed, status (``STATUS_OK``, ``STATUS_MUJOCO`` or
+        ``STATUS_ACTUATOR``) and the cylinder index of an actuator failure (else -1).
     """
+    step1, step2, full_step = step_addresses[0], step_addresses[1], step_addresses[2]
+    baseline = np.empty(UNSTABLE_WARNINGS.shape[0], dtype=np.int64)
+    for k in range(UNSTABLE_WARNINGS.shape[0]):
+        baseline[k] = warning_counts[UNSTABLE_WARNINGS[k]]
     rows = reference_table.shape[0]
     for k in range(step_count):
         if rows > 0:
             row = min(reference_start + k, rows - 1)
             for i in range(reference_angles.shape[0]):
                 reference_angles[i] = reference_table[row, i]
-        robot_control_step(
+        if coupling[K_FRESH] == 0:
+            _call_step(step1, model_address, data_address)
+        bad = robot_control_step(
             tendon_length, tendon_velocity, tendon_ids, actuator_ids, control,
             tendon_frictionloss, tendon_damping, linkage, seal, mujoco_friction, params,
             state, supply, outputs, gains, gain_scale, extra, pid_state, force_reference,
             reference_angles, open_loop_voltage, commands, positions, velocities,
-            reference_positions, control_step, substeps,
+            reference_positions, coupling, control_step, substeps,
         )
-        for _ in range(physics_steps):
-            _call_step(step_address, model_address, data_address)
+        if bad >= 0:
+            return k, STATUS_ACTUATOR, bad
+        _call_step(step2, model_address, data_address)
+        for _ in range(physics_steps - 1):
+            _call_step(full_step, model_address, data_address)
+        coupling[K_FRESH] = 0
+        if _unstable(warning_counts, baseline):
+            return k + 1, STATUS_MUJOCO, -1
+    if coupling[K_FRESH] == 0:
+        _call_step(step1, model_address, data_address)
+        coupling[K_FRESH] = 1
+    if _unstable(warning_counts, baseline):
+        return step_count, STATUS_MUJOCO, -1
+    bad = sample_actuators(
+        tendon_length, tendon_velocity, tendon_ids, linkage, params, state, supply, outputs,
+        commands, positions, velocities, coupling, control_step, substeps,
+    )
+    if bad >= 0:
+        return step_count, STATUS_ACTUATOR, bad
+    return step_count, STATUS_OK, -1
