@@ -242,7 +242,6 @@ class RobotSimulation:
         self.steps_taken = 0
         self.divergences = 0  # runs of step() that stopped on a diverged state
         self.set_pose(np.clip(np.zeros(n), robot.lower_limits(), robot.upper_limits()))
-        self.step(0)  # compile (or load from the cache) before any timing starts
 
     # --- state -----------------------------------------------------------------------
     @property
@@ -341,6 +340,7 @@ class RobotSimulation:
         self.force_reference[:] = 0.0
         self.extra[:, X_FORCE_TRACKING] = 0.0
         self.reference_angles[:] = angles
+        self.step(0)  # piston readouts and forces of the new pose (compiles on first use)
 
     # --- commands --------------------------------------------------------------------
     def command_angles(self, angles: np.ndarray, joints: np.ndarray | None = None) -> None:
