@@ -1,17 +1,30 @@
 # Two entry points for a fresh machine:
 #   make demo   set up .venv and run the representative rig demo (writes runs/demo/)
 #   make test   set up .venv and run the test suite
+# Both install the exact versions of requirements.lock; `make lock` refreshes it.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
+LOCK := requirements.lock
 
-.PHONY: demo test test-all setup lint bench
+.PHONY: demo test test-all setup lint bench lock
 
-$(BIN)/pneumaquad: pyproject.toml
+$(BIN)/pneumaquad: pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[dev]'
+	$(BIN)/pip install --quiet --constraint $(LOCK) -e '.[dev]'
 	touch $(BIN)/pneumaquad
+
+# Resolve pyproject.toml's ranges afresh in a throw-away venv and pin what was installed.
+lock:
+	rm -rf .lock-venv
+	$(PYTHON) -m venv .lock-venv
+	.lock-venv/bin/pip install --quiet --upgrade pip
+	.lock-venv/bin/pip install --quiet -e '.[dev]'
+	{ echo "# Exact versions for make setup/test/demo and .ci/run; refresh with make lock."; \
+	  echo "# Resolved with $$(.lock-venv/bin/python -V) on $$(uname -sm)."; \
+	  .lock-venv/bin/pip freeze --exclude-editable; } > $(LOCK)
+	rm -rf .lock-venv
 
 setup: $(BIN)/pneumaquad
 

@@ -1,3 +1,8 @@
 """pneumaquad: simulator for pneumatically actuated legged robots."""
 
-__version__ = "0.1.0"
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("pneumaquad")  # one source: pyproject.toml
+except PackageNotFoundError:  # pragma: no cover - run from a source tree, not installed
+    __version__ = "0+unknown"

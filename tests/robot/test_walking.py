@@ -115,11 +115,16 @@ def _swing_heights(tmp_path: Path, swing_from_ground: bool) -> np.ndarray:
 
 def test_swing_height_from_the_ground_lifts_the_feet_higher(tmp_path: Path) -> None:
     # Under plain position control the body sags on the corner of a lifted leg, eating
-    # the planned 40 mm lift; taking the swing height from the ground gives it back.
+    # part of the planned lift; taking the swing height from the ground gives it back:
+    # every swing foot then clears the ground by the planned lift. (Walks are chaotic:
+    # single-run heights move by 10-20 mm with tiny changes, so the body-relative run is
+    # only compared in direction. Measured: from the ground 57-74 mm, body-relative
+    # 26-43 mm.)
+    lift = WalkSettings().step_height
     body_relative = _swing_heights(tmp_path, swing_from_ground=False)
     from_ground = _swing_heights(tmp_path, swing_from_ground=True)
-    assert from_ground.mean() > body_relative.mean() + 0.01
-    assert from_ground.min() > 0.5 * 0.04  # measured 39-93 mm; body-relative 27-54 mm
+    assert np.all(from_ground > 0.9 * lift)
+    assert from_ground.mean() > body_relative.mean()
 
 
 def test_heading_hold_turns_the_standing_body_towards_the_heading() -> None:
