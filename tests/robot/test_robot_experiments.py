@@ -219,7 +219,12 @@ def test_a_diverging_run_stops_with_a_clear_error_and_keeps_its_recording(
         run_phases(sim, phases, tmp_path, "diverging")
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert "diverged" in summary["error"]
-    assert read_recording(tmp_path / "recording.csv")["time [s]"].size >= 1
+    assert summary["diverged"] is True and summary["divergences [count]"] == 1
+    times = read_recording(tmp_path / "recording.csv")["time [s]"]
+    assert times.size >= 1
+    assert np.all(np.diff(times) > 0.0)  # no silent reset: time never jumps back
+    assert summary["diverged at [s]"] >= times[-1]
+    assert sim.time == pytest.approx(summary["diverged at [s]"])  # stopped, not reset
 
 
 def test_tank_supply_runs_down_by_the_air_the_cylinders_draw() -> None:

@@ -189,8 +189,11 @@ def run_phases(
     )
     if extra_summary:
         summary.update(extra_summary)
+    summary["diverged"] = failure is not None
+    summary["divergences [count]"] = simulation.divergences
     if failure is not None:
         summary["error"] = str(failure)
+        summary["diverged at [s]"] = failure.time
     write_summary(folder, summary)
     if failure is not None:
         raise failure
