@@ -125,29 +125,77 @@ def rig_step(
     finish_run(folder, summary)
 
 
+#: Longest spacer sweep, all held voltages together [s] (one hour).
+MAX_SPACER_TIME = 3600.0
+
+
+def held_voltages(text: str, valve_range: tuple[float, float]) -> list[float]:
+    """Comma-separated held commands ("4 V,4.5 V,5.5 V") [V], each within the valve range.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``VOLTAGES``, the item and the expected range.
+    """
+    low, high = valve_range
+    items = [item.strip() for item in text.split(",")]
+    if not all(items):
+        raise ParameterError.single(
+            "VOLTAGES", text, 'one voltage or several separated by commas, e.g. "4 V,5.5 V"'
+        )
+    values = [quantity(item, "voltage", "VOLTAGES") for item in items]
+    for item, value in zip(items, values, strict=True):
+        if not low <= value <= high:
+            raise ParameterError.single("VOLTAGES", item, f"a voltage within [{low:g}, {high:g}] V")
+    return values
+
+
 @rig_app.command("spacer")
 def rig_spacer(
-    voltage: Annotated[str, typer.Argument(help='Held command, e.g. "5.5 V".')],
+    voltages: Annotated[
+        str,
+        typer.Argument(
+            help='Held command, e.g. "5.5 V", or a sweep of several held one after the other, '
+            'e.g. "4 V,4.5 V,4.85 V,5.25 V,5.55 V,6 V" (input for fit valve --spacer).'
+        ),
+    ],
     params: ParamsOption = "thesis-rig",
     overrides: SetOption = None,
     output: OutputOption = None,
-    duration: Annotated[str, typer.Option(help="Duration.")] = "5 s",
+    duration: Annotated[str, typer.Option(help="Time at each held voltage.")] = "5 s",
 ) -> None:
-    """Fixed piston (spacer, thesis 4.2.1) at a held voltage: pressures settle on Fig. 23."""
+    """Fixed piston (spacer, thesis 4.2.1) at held voltages: pressures settle on Fig. 23.
+
+    One recording holds every voltage in turn for --duration each; `pneumaquad fit valve
+    --spacer RUN_FOLDER` fits the input-pressure curves from it (three voltages at least,
+    two of them in each port's transition).
+    """
     setup = load_rig(params, [*(overrides or []), "rig.spacer=true"])
-    command = quantity(voltage, "voltage", "VOLTAGE")
-    total = quantity(duration, "time", "--duration")
-    count = round(total / setup.simulation.control_step)
+    valve = setup.actuator.valve
+    levels = held_voltages(voltages, (valve.min_voltage, valve.max_voltage))
+    hold = quantity(duration, "time", "--duration")
+    control_step = setup.simulation.control_step
+    if not control_step <= hold <= MAX_SPACER_TIME / len(levels):
+        raise ParameterError.single(
+            "--duration",
+            duration,
+            f"a time per voltage from one control step ({control_step:g} s) to "
+            f"{MAX_SPACER_TIME / len(levels):g} s ({MAX_SPACER_TIME:g} s for the "
+            f"{len(levels)} voltages together)",
+        )
+    signal = signals.step_train(levels, hold, control_step)
+    shown = ", ".join(f"{value:g} V" for value in levels)
     folder = create_run_folder(output, "rig-spacer")
     with progress_bar("rig spacer") as update:
         _, summary = run_rig_experiment(
             setup,
             folder,
-            signals.constant(command, count),
+            signal,
             False,
-            f"fixed piston at {command:g} V",
+            f"fixed piston at {shown}",
             None,
             update,
+            extra={"held voltages [V]": levels, "time per voltage [s]": hold},
         )
     finish_run(folder, summary)
 

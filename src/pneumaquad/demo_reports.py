@@ -4,12 +4,16 @@
   experiment simulated with LuGre friction instead of Stribeck-tanh, 20 µm position noise,
   0.3 kPa pressure noise and a 20 ms delay, written as a lab-style CSV (ms, in, psig) with a
   column mapping, and imported back through :mod:`pneumaquad.measured`.
+* Stand-in lab data for identification (`write_identification_lab_data`): a fixed-piston
+  sweep and open-loop steps of ``thesis-rig`` in the same lab format with a command column,
+  the input of the README's ``pneumaquad fit`` example.
 * Each of those runs, and the quadruped stand-up, gets its own ``pneumaquad report``.
 """
 
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -20,11 +24,23 @@ from pneumaquad.reporting import build_run_report
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import simulate_rig
 
-__all__ = ["REPORT_SECTIONS", "write_lab_style_csv"]
+__all__ = [
+    "LAB_SPACER_VOLTAGES",
+    "LAB_STEP_VOLTAGES",
+    "REPORT_SECTIONS",
+    "write_identification_lab_data",
+    "write_lab_style_csv",
+]
 
 INCH = 0.0254
 PSI = 6894.757293168361  # Pa per psi (lbf/in²)
 _STEP_LEVELS = [0.4 * INCH, 1.4 * INCH, 0.6 * INCH, 1.2 * INCH, 0.875 * INCH]
+#: Held commands of the stand-in spacer sweep [V]: both ports' transitions (thesis-rig
+#: centred voltages -1.25...+0.75 and -0.75...+1.25) hold several each.
+LAB_SPACER_VOLTAGES = (3.5, 4.0, 4.4, 4.75, 5.0, 5.25, 5.5, 5.75, 6.0, 6.5, 7.0)
+#: Commands of the stand-in open-loop steps [V]: valve offset 5.25 V plus the centred
+#: voltages -3 ... +3 V, five or more on each side for the area polynomials (App. B.2).
+LAB_STEP_VOLTAGES = (2.25, 3.25, 4.0, 4.5, 4.9, 5.25, 5.6, 6.0, 6.5, 7.25, 8.25)
 
 
 class Report(Protocol):
@@ -40,6 +56,8 @@ def write_lab_style_csv(
     pressure_noise: float = 300.0,
     name: str = "lab-step-train",
     atmosphere: float = 101325.0,
+    with_command: bool = False,
+    mapping_name: str | None = None,
 ) -> tuple[Path, Path]:
     """Write a rig recording as a lab CSV (ms, in, psig) and its column-mapping TOML.
 
@@ -59,30 +77,120 @@ def write_lab_style_csv(
         File stem.
     atmosphere : float
         Atmospheric pressure for the gauge columns [Pa].
+    with_command : bool
+        Also write the valve command (column ``u_V``, volts, no noise) and map it.
+    mapping_name : str, optional
+        Stem of the mapping file; ``<name>-mapping`` by default. Files of the same
+        columns can share one.
     """
     generator = np.random.default_rng(seed)
     time = recording["time [s]"] + delay
     position = recording["position [m]"] + generator.normal(0.0, position_noise, time.size)
     cap = recording["cap pressure [Pa]"] + generator.normal(0.0, pressure_noise, time.size)
     rod = recording["rod pressure [Pa]"] + generator.normal(0.0, pressure_noise, time.size)
-    data = np.column_stack(
-        [time * 1e3, position / INCH, (cap - atmosphere) / PSI, (rod - atmosphere) / PSI]
-    )
+    columns = [time * 1e3, position / INCH, (cap - atmosphere) / PSI, (rod - atmosphere) / PSI]
+    header = "t_ms,x_in,p_cap_psig,p_rod_psig"
+    if with_command:
+        columns.append(recording["command [V]"])
+        header += ",u_V"
     folder.mkdir(parents=True, exist_ok=True)
     csv = folder / f"{name}.csv"
-    np.savetxt(csv, data, delimiter=",", header="t_ms,x_in,p_cap_psig,p_rod_psig",
-               comments="", fmt="%.15g")
-    mapping = folder / f"{name}-mapping.toml"
+    np.savetxt(csv, np.column_stack(columns), delimiter=",", header=header, comments="",
+               fmt="%.15g")
+    mapping = folder / f"{mapping_name or name + '-mapping'}.toml"
+    described = csv.name if mapping_name is None else f"the lab CSVs ({header})"
     mapping.write_text(
-        f"# Column mapping of {csv.name} for pneumaquad.measured\n"
+        f"# Column mapping of {described} for pneumaquad.measured\n"
         f"atmospheric_pressure = {atmosphere!r}\n[columns]\n"
         'time = { source = "t_ms", unit = "ms" }\n'
         'position = { source = "x_in", unit = "in" }\n'
         'cap_pressure = { source = "p_cap_psig", unit = "psig" }\n'
-        'rod_pressure = { source = "p_rod_psig", unit = "psig" }\n',
+        'rod_pressure = { source = "p_rod_psig", unit = "psig" }\n'
+        + ('command = { source = "u_V", unit = "V" }\n' if with_command else ""),
         encoding="utf-8",
     )
     return csv, mapping
+
+
+def write_identification_lab_data(
+    folder: Path,
+    *,
+    spacer_voltages: Sequence[float] = LAB_SPACER_VOLTAGES,
+    spacer_hold: float = 5.0,
+    step_voltages: Sequence[float] = LAB_STEP_VOLTAGES,
+    step_time: float = 2.0,
+    step_duration: float = 3.5,
+    delay: float = 0.02,
+    seed: int = 2,
+) -> dict[str, list[Path]]:
+    """Stand-in lab data for ``pneumaquad fit``: a spacer sweep and open-loop steps.
+
+    Simulated with ``thesis-rig`` (its cutoffs, area polynomials and Stribeck-tanh
+    friction are what a fit should give back) and written like `write_lab_style_csv`
+    (ms, in, psig, 20 µm and 0.3 kPa noise, ``delay``) with the command in volts:
+    ``spacer-sweep.csv`` (piston held, each of ``spacer_voltages`` for ``spacer_hold``),
+    ``open-loop-step-<V>.csv`` (thesis protocol, 4.2.3: the opposite saturation until
+    ``step_time``, then the step) and one mapping, ``identification-mapping.toml``.
+
+    Parameters
+    ----------
+    folder : Path
+        Where the files go.
+    spacer_voltages : sequence of float
+        Held commands of the sweep [V].
+    spacer_hold : float
+        Time at each held command [s].
+    step_voltages : sequence of float
+        Step commands [V], one file each.
+    step_time, step_duration : float
+        Time of each step and length of each step file [s].
+    delay : float
+        Time offset of the "measured" files [s].
+    seed : int
+        Seed of the noise (each file its own stream).
+
+    Returns
+    -------
+    dict
+        ``{"spacer": [csv], "steps": [csv, ...], "mapping": [toml]}``.
+    """
+    mapping_name = "identification-mapping"
+    fixed = load_rig("thesis-rig", ["rig.spacer=true"])
+    control_step = fixed.simulation.control_step
+    sweep = signals.step_train(list(spacer_voltages), spacer_hold, control_step)
+    spacer_csv, mapping = write_lab_style_csv(
+        simulate_rig(fixed, sweep, closed_loop=False).recording,
+        folder,
+        delay,
+        seed=seed,
+        name="spacer-sweep",
+        with_command=True,
+        mapping_name=mapping_name,
+    )
+    setup = load_rig("thesis-rig")
+    valve = setup.actuator.valve
+    step_files = []
+    for index, voltage in enumerate(step_voltages):
+        command = signals.thesis_step_command(
+            voltage,
+            valve.offset_voltage,
+            valve.min_voltage,
+            valve.max_voltage,
+            control_step,
+            step_time,
+            step_duration,
+        )
+        csv, _ = write_lab_style_csv(
+            simulate_rig(setup, command, closed_loop=False).recording,
+            folder,
+            delay,
+            seed=seed + 1 + index,
+            name=f"open-loop-step-{voltage:.2f}V".replace(".", "_"),
+            with_command=True,
+            mapping_name=mapping_name,
+        )
+        step_files.append(csv)
+    return {"spacer": [spacer_csv], "steps": step_files, "mapping": [mapping]}
 
 
 def _measured_comparison(folder: Path, report: Report) -> None:
@@ -110,6 +218,12 @@ def _measured_comparison(folder: Path, report: Report) -> None:
     )
 
 
+def _identification_data(folder: Path, report: Report) -> None:
+    """Write the stand-in identification data (no report section: the README fits it)."""
+    del report
+    write_identification_lab_data(folder / "lab-data")
+
+
 def _robot_report(folder: Path, report: Report) -> None:
     page = build_run_report(folder / "robot-stand")
     report.add(
@@ -121,4 +235,4 @@ def _robot_report(folder: Path, report: Report) -> None:
     )
 
 
-REPORT_SECTIONS = (_measured_comparison, _robot_report)
+REPORT_SECTIONS = (_measured_comparison, _identification_data, _robot_report)

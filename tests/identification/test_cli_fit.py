@@ -123,3 +123,75 @@ def test_valve_command_without_inputs_exits_2(tmp_path) -> None:
         fit_app, ["friction", str(tmp_path / "nope.csv"), "-o", str(tmp_path / "x.toml")]
     )
     assert missing.exit_code == 2 and "nope.csv" in missing.output
+
+
+#: Held voltages that leave both ports on their plateaus: no cutoff is determined.
+PLATEAU_VOLTAGES = (-2.25, -1.25, 1.75, 2.75)
+
+
+@pytest.fixture(scope="module")
+def plateau_spacer(tmp_path_factory, spacer_rig) -> Path:
+    folder = tmp_path_factory.mktemp("plateaus") / "spacer"
+    return write_run_folder(folder, spacer_recording(spacer_rig, PLATEAU_VOLTAGES, 3.0, seed=62))
+
+
+def test_failed_fit_exits_1_names_the_port_and_writes_nothing(tmp_path, plateau_spacer) -> None:
+    output = tmp_path / "valve.toml"
+    arguments = ["valve", "--spacer", str(plateau_spacer), "-o", str(output)]
+    result = CliRunner().invoke(fit_app, arguments)
+    assert result.exit_code == 1, result.output
+    assert not output.exists()
+    text = " ".join(result.output.split())
+    for port in (1, 2):
+        assert f"input-pressure curve, port {port}" in text
+        assert f"port {port} high_pressure_cutoff" in text or f"port {port}: the two" in text
+    assert "No parameter file written" in text and "--force" in text
+    assert "Traceback" not in result.output
+
+
+def test_force_writes_a_failed_fit_and_marks_it(tmp_path, plateau_spacer) -> None:
+    output = tmp_path / "valve.toml"
+    arguments = ["valve", "--spacer", str(plateau_spacer), "-o", str(output), "--force"]
+    result = CliRunner().invoke(fit_app, arguments)
+    assert result.exit_code == 0, result.output
+    assert "--force" in result.output
+    header = output.read_text().split("\n\n")[0]
+    assert "FAILED CHECK" in header and "port 2" in header
+    load_rig(output)
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "fragment"),
+    [
+        ("--start-temperature", "warm", "--start-temperature"),
+        ("--start-temperature", "20 m", "--start-temperature"),
+        ("--mode", "both", "--mode"),
+        ("--duration", "0 s", "--duration"),
+    ],
+)
+def test_bad_valve_options_exit_2(tmp_path, option: str, value: str, fragment: str) -> None:
+    step = write_run_folder(tmp_path / "step", {"time [s]": np.arange(3.0)})
+    output = tmp_path / "x.toml"
+    result = CliRunner().invoke(
+        fit_app, ["valve", "--steps", str(step), option, value, "-o", str(output)]
+    )
+    assert result.exit_code == 2, result.output
+    assert fragment in result.output and "Traceback" not in result.output
+    assert not output.exists()
+
+
+def test_glob_patterns_are_expanded_and_must_match(tmp_path, area_rig) -> None:
+    for index, voltage in enumerate((6.0, 4.0)):
+        write_lab_csv(tmp_path / f"step-{index}.csv", step_recording(area_rig, voltage, 63 + index))
+    mapping = tmp_path / "mapping.toml"
+    mapping.write_text(MAPPING)
+    output = tmp_path / "valve.toml"
+    base = ["valve", "--mapping", str(mapping), "-o", str(output)]
+    missing = CliRunner().invoke(fit_app, [*base, "--steps", str(tmp_path / "nothing-*.csv")])
+    assert missing.exit_code == 2 and "matches no file" in missing.output
+    result = CliRunner().invoke(
+        fit_app, [*base, "--steps", str(tmp_path / "step-*.csv"), "--start-temperature", "hold"]
+    )
+    assert result.output.count("(hold)") == 2  # one table row per step: both files read
+    # two steps are too few for the area polynomials, and nothing else was asked for
+    assert result.exit_code == 2 and "nothing was fitted" in result.output

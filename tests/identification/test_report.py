@@ -7,7 +7,7 @@ import math
 import pytest
 
 from pneumaquad.identification import FitResult, updates_from_fit, write_parameter_file
-from pneumaquad.identification.report import parameter_name_and_unit
+from pneumaquad.identification.report import check_standard_errors, parameter_name_and_unit
 from pneumaquad.params import ParameterError, load_rig
 
 
@@ -83,3 +83,20 @@ def test_invalid_result_is_refused_and_not_written(tmp_path) -> None:
     assert list(tmp_path.iterdir()) == []
     with pytest.raises(ParameterError, match="no-such-set"):
         write_parameter_file("no-such-set", {}, target)
+
+
+def test_check_standard_errors_flags_undetermined_parameters() -> None:
+    fit = FitResult(
+        name="coulomb-viscous friction",
+        parameters={"coulomb_force [N]": 13.0, "viscous_coefficient [N*s/m]": 2.0},
+        standard_errors={"coulomb_force [N]": 0.1, "viscous_coefficient [N*s/m]": 0.9},
+        r_squared=0.99,
+        residual_rms=0.2,
+        n_points=100,
+    )
+    checked = check_standard_errors(fit)
+    assert checked.failed and len(checked.problems) == 1
+    assert "viscous_coefficient" in checked.problems[0]
+    assert check_standard_errors(fit, max_relative_error=0.5) is fit
+    undetermined = FitResult("x", {"a [N]": 1.0}, {"a [N]": float("inf")}, 0.0, 1.0, 3)
+    assert check_standard_errors(undetermined).failed

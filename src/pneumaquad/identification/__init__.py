@@ -25,7 +25,7 @@ from .preprocess import (
     prepare_signals,
     select_step,
 )
-from .report import FitResult, updates_from_fit, write_parameter_file
+from .report import FitResult, check_standard_errors, updates_from_fit, write_parameter_file
 from .valve import (
     AreaPolynomials,
     EquivalentAreaFit,
@@ -37,6 +37,7 @@ from .valve import (
     fit_area_polynomials,
     fit_input_pressure_curve,
     input_pressure_curves,
+    start_temperatures_from_hold,
     steady_state_points,
 )
 
@@ -54,6 +55,7 @@ __all__ = [
     "StictionEstimate",
     "area_polynomial_updates",
     "areas_table",
+    "check_standard_errors",
     "equivalent_area_for_step",
     "fit_area_polynomials",
     "fit_coulomb_viscous",
@@ -63,6 +65,7 @@ __all__ = [
     "kinetic_friction_points",
     "prepare_signals",
     "select_step",
+    "start_temperatures_from_hold",
     "steady_state_points",
     "stiction_from_step",
     "stribeck_tanh_curve",

@@ -4,12 +4,23 @@ For each open-loop step at a voltage u the thesis hand-tuned a discharge coeffic
 the simulated pressures and position matched the measurement (Fig. 24). Here the area of
 each port at u (or one factor on both base polynomials' values there) is found by bounded
 least squares, re-simulating the rig from the recorded state before the step.
+
+The simulation runs on the recording's own time base: any uniform sample rate works (the
+simulation step divides the sample period, so every recorded sample falls on a simulated
+one); time stamps that are not uniform are refused with an error saying so.
+
+In the adiabatic chamber model (eq 4.1.7, 4.1.10) a chamber that has just filled is far
+above the supply temperature (about 380 K after the thesis protocol's 5 s hold) and one
+that has just emptied below it, and for the same pressure its gas mass is lower or higher
+by that ratio. Starting the step at the supply temperature then biases the fitted areas
+(docs/analysis.md). `start_temperatures_from_hold` estimates the temperatures by
+simulating the recorded hold before the step.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,6 +28,8 @@ from scipy.optimize import least_squares
 
 from pneumaquad import layout
 from pneumaquad.actuator import supply_state
+from pneumaquad.analysis import find_steps
+from pneumaquad.analysis.filters import sample_rate_of
 from pneumaquad.control.pid import N_CONTROLLER_STATES
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.physics.chamber import chamber_volume_cap, chamber_volume_rod
@@ -25,17 +38,37 @@ from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_
 from pneumaquad.rig.simulate import N_COLUMNS, RIG_COLUMNS, run_rig_chunk
 from pneumaquad.valve_fit import evaluate_equivalent_area
 
-from .preprocess import FilterSettings, IdentificationError, prepare_signals, select_step
+from .preprocess import REQUIRED_COLUMNS, IdentificationError, select_step
 from .report import FitResult, covariance_from_jacobian, r_squared
 
-__all__ = ["AREA_MODES", "EquivalentAreaFit", "equivalent_area_for_step"]
+__all__ = [
+    "AREA_MODES",
+    "MAX_AREA_RELATIVE_ERROR",
+    "MAX_AREA_RESIDUAL",
+    "START_TEMPERATURE_SOURCES",
+    "EquivalentAreaFit",
+    "SimulationGrid",
+    "equivalent_area_for_step",
+    "simulation_grid",
+    "start_temperatures_from_hold",
+    "uniform_sample_period",
+]
 
 #: Parametrisations of `equivalent_area_for_step`.
 AREA_MODES = ("per_port", "scale")
+#: Where the gas temperatures at the start of a fitted step come from.
+START_TEMPERATURE_SOURCES = ("auto", "recorded", "hold", "supply")
+#: Largest relative standard error of a fitted area before the fit counts as failed [-].
+MAX_AREA_RELATIVE_ERROR = 0.25
+#: Largest RMS of the normalised residuals before the fit counts as failed [-]: 3 % of
+#: Ps - Pe (about 10 kPa) or of the stroke; sensor noise alone is a few tenths of a percent.
+MAX_AREA_RESIDUAL = 0.03
 _MIN_AREA, _MAX_AREA = 1e-11, 1e-4  # bounds of a fitted equivalent area [m^2]
+_BOUND_MARGIN = 1e-3  # log-area distance from a bound that counts as "at the bound"
 _COMPARED = tuple(
     RIG_COLUMNS.index(name) for name in ("cap pressure [Pa]", "rod pressure [Pa]", "position [m]")
 )
+_TEMPERATURE_COLUMNS = ("cap temperature [K]", "rod temperature [K]")
 
 
 @dataclass(frozen=True)
@@ -52,9 +85,16 @@ class EquivalentAreaFit:
         The base polynomials' values at the voltage [m^2].
     fit : FitResult
         ``"port1_area [m^2]"``/``"port2_area [m^2]"`` or ``"area_scale [-]"``;
-        residuals are normalised (pressures by Ps - Pe, position by the stroke).
+        residuals are normalised (pressures by Ps - Pe, position by the stroke);
+        ``fit.problems`` says why the fit is not to be trusted, if it is not.
     pressure_rmse, position_rmse : float
         Errors of the fitted simulation [Pa], [m].
+    start_temperatures : (float, float)
+        Cap and rod gas temperatures the step was simulated from [K].
+    temperature_source : str
+        Where they came from: ``"recorded"``, ``"hold"``, ``"supply"`` or ``"given"``.
+    sample_period : float
+        The recording's sample period [s].
     """
 
     centered_voltage: float
@@ -63,6 +103,90 @@ class EquivalentAreaFit:
     fit: FitResult
     pressure_rmse: float
     position_rmse: float
+    start_temperatures: tuple[float, float] = (math.nan, math.nan)
+    temperature_source: str = ""
+    sample_period: float = math.nan
+
+    @property
+    def failed(self) -> bool:
+        """True when the fit's checks say its areas are not to be trusted."""
+        return self.fit.failed
+
+
+def uniform_sample_period(time: np.ndarray) -> float:
+    """Sample period of a uniformly sampled recording [s].
+
+    Parameters
+    ----------
+    time : numpy.ndarray
+        Sample times [s].
+
+    Returns
+    -------
+    float
+        Mean sample interval [s].
+
+    Raises
+    ------
+    IdentificationError
+        If the times do not increase strictly or their spacing varies by more than 0.1 %
+        (`pneumaquad.analysis.filters.sample_rate_of`): the step would be simulated on a
+        wrong time base. Resample such a recording onto a uniform grid first.
+    """
+    try:
+        return 1.0 / sample_rate_of(time)
+    except ValueError as error:
+        raise IdentificationError(
+            f"the step recording's time base is unusable: {error}. The fit re-simulates the "
+            "step sample by sample, so it needs uniform time stamps"
+        ) from error
+
+
+@dataclass(frozen=True)
+class SimulationGrid:
+    """Simulation time base for a recording.
+
+    Attributes
+    ----------
+    steps_per_sample : int
+        Simulation steps per recorded sample.
+    step : float
+        Simulation step [s]; the sample period over ``steps_per_sample``.
+    substeps : int
+        Integrator substeps per simulation step.
+    """
+
+    steps_per_sample: int
+    step: float
+    substeps: int
+
+
+def simulation_grid(sample_period: float, control_step: float, substeps: int) -> SimulationGrid:
+    """The simulation step that divides a sample period and is at most ``control_step``.
+
+    Parameters
+    ----------
+    sample_period : float
+        Recording's sample period [s].
+    control_step : float
+        The parameter file's control step [s], the longest simulation step used.
+    substeps : int
+        The parameter file's substeps per control step; the substep is kept at most
+        ``control_step / substeps``.
+
+    Returns
+    -------
+    SimulationGrid
+        E.g. 2 ms samples with a 1 ms control step: 2 steps of 1 ms per sample;
+        0.5 ms samples: 1 step of 0.5 ms.
+    """
+    steps_per_sample = max(1, math.ceil(sample_period / control_step - 1e-6))
+    step = sample_period / steps_per_sample
+    return SimulationGrid(
+        steps_per_sample=steps_per_sample,
+        step=step,
+        substeps=max(1, math.ceil(substeps * step / control_step - 1e-6)),
+    )
 
 
 def _with_areas(setup: RigSetup, centered: float, areas: Mapping[int, float]) -> RigSetup:
@@ -90,12 +214,14 @@ class _StartState:
     rod_temperature: float
 
 
-def _simulate_from(setup: RigSetup, start: _StartState, command: np.ndarray) -> np.ndarray:
+def _simulate_from(
+    setup: RigSetup, start: _StartState, command: np.ndarray, grid: SimulationGrid
+) -> np.ndarray:
     """Open-loop rig rows (RIG_COLUMNS) from a state at rest with given gas temperatures.
 
-    `pneumaquad.rig.simulate.simulate_rig` starts at the supply temperature; in the
-    adiabatic model a chamber that has just filled or emptied can be tens of kelvin off
-    it, which changes its mass for the same pressure, so the start state is built here.
+    ``command`` holds one value per simulation step of ``grid``; row k is the state one
+    step after command k began (`pneumaquad.rig.simulate`). The start state is built here
+    because `pneumaquad.rig.simulate.simulate_rig` starts at the supply temperature.
     """
     params = pack_rig_parameters(setup)
     state = rig_initial_state(setup, params)
@@ -123,11 +249,173 @@ def _simulate_from(setup: RigSetup, start: _StartState, command: np.ndarray) -> 
         np.ascontiguousarray(command, dtype=float),
         0,
         command.size,
-        setup.simulation.control_step,
-        setup.simulation.substeps,
+        grid.step,
+        grid.substeps,
         rows,
     )
     return rows
+
+
+@dataclass(frozen=True)
+class _StepSignals:
+    """The columns a step fit reads, as float arrays, with their sample period [s]."""
+
+    time: np.ndarray
+    command: np.ndarray
+    position: np.ndarray
+    cap_pressure: np.ndarray
+    rod_pressure: np.ndarray
+    period: float
+
+
+def _step_signals(recording: Mapping[str, np.ndarray]) -> _StepSignals:
+    missing = [name for name in REQUIRED_COLUMNS if name not in recording]
+    if missing:
+        raise IdentificationError(
+            f"the recording lacks the columns {missing}; it has {sorted(recording)}"
+        )
+    columns = [np.asarray(recording[name], dtype=float) for name in REQUIRED_COLUMNS]
+    return _StepSignals(*columns, period=uniform_sample_period(columns[0]))
+
+
+def _penetration_limit(setup: RigSetup) -> float:
+    """Deepest end-stop penetration the supply can hold, Ps·A_cap / k_stop [m].
+
+    A piston held against a stop sits slightly inside it; the recorded start position is
+    kept there (up to this depth) rather than moved onto the stop, which would start the
+    step with the stop's force missing.
+    """
+    stiffness = setup.rig.end_stop_stiffness
+    if not stiffness > 0.0:
+        return 0.0
+    cylinder = setup.actuator.cylinder
+    return setup.actuator.supply.supply_pressure * cylinder.cap_area / stiffness
+
+
+def _state_at(
+    setup: RigSetup,
+    signals: _StepSignals,
+    samples: slice,
+    temperatures: Sequence[float],
+) -> _StartState:
+    """Mean recorded position and pressures over ``samples``, at rest, with temperatures."""
+    stroke = setup.actuator.cylinder.stroke
+    limit = _penetration_limit(setup)
+    return _StartState(
+        position=float(np.clip(np.mean(signals.position[samples]), -limit, stroke + limit)),
+        cap_pressure=float(np.mean(signals.cap_pressure[samples])),
+        rod_pressure=float(np.mean(signals.rod_pressure[samples])),
+        cap_temperature=float(temperatures[0]),
+        rod_temperature=float(temperatures[1]),
+    )
+
+
+def _hold_temperatures(
+    setup: RigSetup, signals: _StepSignals, step_index: int, grid: SimulationGrid
+) -> tuple[float, float]:
+    """Gas temperatures at sample ``step_index - 1`` from simulating the hold before it."""
+    supply_temperature = setup.actuator.gas.supply_temperature
+    changes = [
+        segment.start_index
+        for segment in find_steps(signals.time, signals.command, 0.05)
+        if segment.start_index < step_index
+    ]
+    first = changes[-1] if changes else 0
+    before = step_index - 1
+    if before <= first:
+        return supply_temperature, supply_temperature
+    start = _state_at(
+        setup, signals, slice(first, first + 1), (supply_temperature, supply_temperature)
+    )
+    command = np.repeat(signals.command[first + 1 : step_index], grid.steps_per_sample)
+    rows = _simulate_from(setup, start, command, grid)
+    return tuple(
+        float(rows[-1, RIG_COLUMNS.index(name)]) for name in _TEMPERATURE_COLUMNS
+    )  # type: ignore[return-value]
+
+
+def start_temperatures_from_hold(
+    setup: RigSetup,
+    recording: Mapping[str, np.ndarray],
+    *,
+    step_time: float | None = None,
+) -> tuple[float, float]:
+    """Cap and rod gas temperatures just before a step, by simulating the hold before it.
+
+    The constant-command segment before the step (the thesis protocol's hold at the
+    opposite saturation, 4.2.3) is simulated open loop with the adiabatic chamber model
+    (eq 4.1.7, 4.1.10) from the recorded position and pressures at its start and the supply
+    temperature there. Without heat transfer a filled chamber ends well above the supply
+    temperature; the estimate hardly depends on the valve areas, since the hold runs until
+    the pressures have settled.
+
+    Parameters
+    ----------
+    setup : RigSetup
+        Parameters of the simulation (valve areas at the hold voltage, gas).
+    recording : mapping of str to numpy.ndarray
+        An open-loop step recording (columns of `preprocess.REQUIRED_COLUMNS`), uniformly
+        sampled.
+    step_time : float, optional
+        Time of the step [s]; by default the first command step.
+
+    Returns
+    -------
+    (float, float)
+        Cap and rod gas temperatures [K]; the supply temperature for both when the
+        recording holds no sample before the step's previous one.
+
+    Raises
+    ------
+    IdentificationError
+        For missing columns, non-uniform time stamps or no step.
+    """
+    signals = _step_signals(recording)
+    grid = simulation_grid(
+        signals.period, setup.simulation.control_step, setup.simulation.substeps
+    )
+    step = select_step(signals.time, signals.command, step_time)
+    return _hold_temperatures(setup, signals, step.start_index, grid)
+
+
+def _start_temperatures(
+    source: str | float | Sequence[float],
+    setup: RigSetup,
+    recording: Mapping[str, np.ndarray],
+    signals: _StepSignals,
+    step_index: int,
+    grid: SimulationGrid,
+) -> tuple[tuple[float, float], str]:
+    """Resolve the ``start_temperature`` argument to temperatures [K] and their source."""
+    supply_temperature = setup.actuator.gas.supply_temperature
+    if not isinstance(source, str):
+        values = np.atleast_1d(np.asarray(source, dtype=float)).ravel()
+        if values.size == 1:
+            values = np.repeat(values, 2)
+        if values.size != 2 or not np.all(np.isfinite(values)) or np.any(values <= 0.0):
+            raise IdentificationError(
+                f"start_temperature {source!r} should be one or two (cap, rod) temperatures "
+                "above 0 K"
+            )
+        return (float(values[0]), float(values[1])), "given"
+    if source not in START_TEMPERATURE_SOURCES:
+        raise IdentificationError(
+            f"start_temperature {source!r} is not one of {START_TEMPERATURE_SOURCES} "
+            "or a temperature"
+        )
+    recorded = all(name in recording for name in _TEMPERATURE_COLUMNS)
+    if source == "recorded" and not recorded:
+        raise IdentificationError(
+            f"start_temperature 'recorded' needs the columns {list(_TEMPERATURE_COLUMNS)}, "
+            "which the recording lacks; use 'hold' or a temperature"
+        )
+    if source == "recorded" or (source == "auto" and recorded):
+        before = step_index - 1
+        values = tuple(float(recording[name][before]) for name in _TEMPERATURE_COLUMNS)
+        return values, "recorded"  # type: ignore[return-value]
+    if source == "supply":
+        return (supply_temperature, supply_temperature), "supply"
+    return _hold_temperatures(setup, signals, step_index, grid), "hold"
 
 
 def equivalent_area_for_step(
@@ -139,27 +427,42 @@ def equivalent_area_for_step(
     mode: str = "per_port",
     position_weight: float = 1.0,
     max_evaluations: int = 60,
-    initial_temperatures: tuple[float, float] | None = None,
-    filters: FilterSettings | None = None,
+    start_temperature: str | float | Sequence[float] = "auto",
+    rest_window: float = 0.02,
+    max_relative_error: float = MAX_AREA_RELATIVE_ERROR,
+    max_residual: float = MAX_AREA_RESIDUAL,
 ) -> EquivalentAreaFit:
     """Fit the equivalent orifice areas at one open-loop step's voltage (thesis 4.2.3).
 
-    The rig is simulated from the recorded state just before the step (filtered position
-    and pressures, at rest, see ``initial_temperatures``) with the recorded command over
-    ``duration``; each port's area at the step voltage is an unknown
-    (``mode="per_port"``), or one factor scales both base polynomials' values there
-    (``mode="scale"``). Bounded least squares
+    The rig is simulated from the recorded state just before the step (position and
+    pressures averaged over ``rest_window`` before it, at rest, gas temperatures per
+    ``start_temperature``) with the recorded
+    command over ``duration``, on the recording's own time base (`simulation_grid`); each
+    port's area at the step voltage is an unknown (``mode="per_port"``), or one factor
+    scales both base polynomials' values there (``mode="scale"``). Bounded least squares
     (`scipy.optimize.least_squares`, log areas) minimises the cap and rod pressure errors
-    over Ps - Pe plus ``position_weight`` times the position error over the stroke: the
-    thesis's hand tuning on pressures with position as the final check. The rest of the
-    setup (friction, input-pressure curves) is taken as known.
+    over Ps - Pe plus ``position_weight`` times the position error over the stroke at the
+    recorded samples: the thesis's hand tuning on pressures with position as the final
+    check. The rest of the setup (friction, input-pressure curves) is taken as known.
+
+    Sample k of the recording is compared with the simulated state at its time stamp; the
+    command recorded at sample k is taken as held over the sample period before it (the
+    convention of `pneumaquad.rig.simulate`), so the step acts from the last sample before
+    the jump.
+
+    The fit checks itself (``fit.problems``): an area whose relative standard error is
+    not finite or above ``max_relative_error``, an area at the search bounds
+    [1e-11, 1e-4] m^2, an RMS normalised residual above ``max_residual``, or no
+    convergence.
 
     Parameters
     ----------
     setup : RigSetup
-        Base parameters; its polynomials give the initial areas.
+        Base parameters; its polynomials give the initial areas, its control step and
+        substeps the longest simulation step and substep.
     recording : mapping of str to numpy.ndarray
-        An open-loop step recording (columns of `preprocess.REQUIRED_COLUMNS`).
+        An open-loop step recording (columns of `preprocess.REQUIRED_COLUMNS`), sampled
+        uniformly at any rate.
     step_time : float, optional
         Time of the step [s]; by default the first command step.
     duration : float
@@ -170,12 +473,20 @@ def equivalent_area_for_step(
         Weight of the normalised position error against the pressure errors.
     max_evaluations : int
         Budget of simulations.
-    initial_temperatures : (float, float), optional
-        Cap and rod gas temperatures before the step [K]. By default the recording's
-        ``"cap temperature [K]"``/``"rod temperature [K]"`` (simulated recordings), else
-        the supply temperature (measured data after a long hold).
-    filters : FilterSettings, optional
-        Filters for the initial state.
+    start_temperature : str, float or (float, float)
+        Cap and rod gas temperatures before the step: ``"recorded"`` (the recording's
+        ``"cap temperature [K]"``/``"rod temperature [K]"``, simulated recordings),
+        ``"hold"`` (`start_temperatures_from_hold`), ``"supply"`` (the supply temperature,
+        right for gas that has cooled back after a long hold), ``"auto"`` (recorded if
+        the columns exist, else hold), or temperatures [K] (one for both chambers).
+    rest_window : float
+        The start state is the mean of the raw samples over this time before the step
+        (at least one sample) [s]; averaging lowers the noise, and unlike a zero-phase
+        filter it mixes in nothing from after the step.
+    max_relative_error : float
+        Largest acceptable relative standard error of a fitted area or factor [-].
+    max_residual : float
+        Largest acceptable RMS of the normalised residuals [-].
 
     Returns
     -------
@@ -184,32 +495,33 @@ def equivalent_area_for_step(
     Raises
     ------
     IdentificationError
-        For an unknown mode, or no samples before the step.
+        For an unknown mode or temperature source, non-uniform time stamps, or no
+        samples before the step.
     """
     if mode not in AREA_MODES:
         raise IdentificationError(f"mode {mode!r} is not one of {AREA_MODES}")
-    signals = prepare_signals(recording, setup, filters)
+    if not duration > 0.0:
+        raise IdentificationError(f"duration must be positive, got {duration!r} s")
+    signals = _step_signals(recording)
+    period = signals.period
+    grid = simulation_grid(period, setup.simulation.control_step, setup.simulation.substeps)
     step = select_step(signals.time, signals.command, step_time)
     start = step.start_index
     if start < 1:
         raise IdentificationError("the recording has no sample before the step")
-    control_step = setup.simulation.control_step
-    count = min(round(duration / control_step), step.end_index - start)
+    count = min(max(1, round(duration / period)), step.end_index - start)
     window = slice(start, start + count)
-    command = np.asarray(recording["command [V]"], dtype=float)[window]
+    command = np.repeat(signals.command[window], grid.steps_per_sample)
+    compared_rows = slice(grid.steps_per_sample - 1, None, grid.steps_per_sample)
     measured = [
-        np.asarray(recording[name], dtype=float)[window]
-        for name in ("cap pressure [Pa]", "rod pressure [Pa]", "position [m]")
+        values[window] for values in (signals.cap_pressure, signals.rod_pressure, signals.position)
     ]
+    valve = setup.actuator.valve
     centered = float(
         centered_voltage(
-            step.final_level,
-            setup.actuator.valve.offset_voltage,
-            setup.actuator.valve.min_voltage,
-            setup.actuator.valve.max_voltage,
+            step.final_level, valve.offset_voltage, valve.min_voltage, valve.max_voltage
         )
     )
-    valve = setup.actuator.valve
     ports = (1, 2)
     initial = {
         port: float(
@@ -225,24 +537,14 @@ def equivalent_area_for_step(
         port: float(np.clip(area, 10 * _MIN_AREA, 0.1 * _MAX_AREA))
         for port, area in initial.items()
     }
-    before = start - 1
-    temperatures = [
-        float(recording[name][before]) if name in recording else ambient
-        for name, ambient in (
-            ("cap temperature [K]", setup.actuator.gas.supply_temperature),
-            ("rod temperature [K]", setup.actuator.gas.supply_temperature),
-        )
-    ]
-    if initial_temperatures is not None:
-        temperatures = [float(value) for value in initial_temperatures]
-    start_state = _StartState(
-        position=float(np.clip(signals.position[before], 0.0, setup.actuator.cylinder.stroke)),
-        cap_pressure=float(signals.cap_pressure[before]),
-        rod_pressure=float(signals.rod_pressure[before]),
-        cap_temperature=temperatures[0],
-        rod_temperature=temperatures[1],
+    temperatures, temperature_source = _start_temperatures(
+        start_temperature, setup, recording, signals, start, grid
     )
     stroke = setup.actuator.cylinder.stroke
+    rest_samples = max(1, round(rest_window / period))
+    start_state = _state_at(
+        setup, signals, slice(max(0, start - rest_samples), start), temperatures
+    )
     span = setup.actuator.supply.supply_pressure - setup.actuator.supply.exhaust_pressure
 
     def areas_of(unknowns: np.ndarray) -> dict[int, float]:
@@ -252,8 +554,8 @@ def equivalent_area_for_step(
 
     def simulate(unknowns: np.ndarray) -> list[np.ndarray]:
         rows = _simulate_from(
-            _with_areas(setup, centered, areas_of(unknowns)), start_state, command
-        )
+            _with_areas(setup, centered, areas_of(unknowns)), start_state, command, grid
+        )[compared_rows]
         return [rows[:, index] for index in _COMPARED]
 
     def residuals(unknowns: np.ndarray) -> np.ndarray:
@@ -268,34 +570,59 @@ def equivalent_area_for_step(
 
     if mode == "scale":
         start_values = np.zeros(1)
-        bounds = (
-            [math.log(_MIN_AREA / max(initial.values()))],
-            [math.log(_MAX_AREA / max(initial.values()))],
-        )
+        lower = [math.log(_MIN_AREA / max(initial.values()))]
+        upper = [math.log(_MAX_AREA / max(initial.values()))]
+        names = ["area_scale [-]"]
     else:
         start_values = np.log([initial[port] for port in ports])
-        bounds = ([math.log(_MIN_AREA)] * 2, [math.log(_MAX_AREA)] * 2)
+        lower, upper = [math.log(_MIN_AREA)] * 2, [math.log(_MAX_AREA)] * 2
+        names = [f"port{port}_area [m^2]" for port in ports]
     solution = least_squares(
         residuals,
         start_values,
-        bounds=bounds,
+        bounds=(lower, upper),
         diff_step=1e-3,
         xtol=1e-4,
         ftol=1e-6,
         max_nfev=max_evaluations,
     )
     areas = areas_of(solution.x)
-    errors = np.sqrt(np.abs(np.diag(covariance_from_jacobian(solution.jac, solution.fun))))
-    if mode == "scale":
-        factor = math.exp(solution.x[0])
-        parameters = {"area_scale [-]": factor}
-        standard_errors = {"area_scale [-]": float(factor * errors[0])}
-    else:
-        parameters = {f"port{port}_area [m^2]": areas[port] for port in ports}
-        standard_errors = {
-            f"port{port}_area [m^2]": float(areas[port] * error)
-            for port, error in zip(ports, errors, strict=True)
-        }
+    with np.errstate(invalid="ignore", over="ignore"):
+        log_errors = np.sqrt(np.abs(np.diag(covariance_from_jacobian(solution.jac, solution.fun))))
+    log_errors[~np.isfinite(log_errors)] = math.inf
+    values = [math.exp(solution.x[0])] if mode == "scale" else [areas[port] for port in ports]
+    parameters = dict(zip(names, values, strict=True))
+    # d(value) = value * d(log value): the standard error of a value is value * log error
+    standard_errors = {
+        name: float(value * error) if math.isfinite(error) else math.inf
+        for name, value, error in zip(names, values, log_errors, strict=True)
+    }
+    residual_rms = math.sqrt(float(solution.fun @ solution.fun) / solution.fun.size)
+    where = f"at {centered:+.3f} V (step at {step.start_time:.4g} s)"
+    problems = []
+    if solution.status <= 0:
+        problems.append(f"equivalent area {where}: least squares stopped: {solution.message}")
+    for index, name in enumerate(names):
+        label = name.split(" [")[0].replace("_", " ")
+        if min(solution.x[index] - lower[index], upper[index] - solution.x[index]) < (
+            _BOUND_MARGIN
+        ):
+            problems.append(
+                f"{label} {where}: {values[index]:.3g} lies at the search bound "
+                f"[{_MIN_AREA:g}, {_MAX_AREA:g}] m^2, so the step does not determine it"
+            )
+        elif not log_errors[index] <= max_relative_error:
+            problems.append(
+                f"{label} {where}: relative standard error {log_errors[index]:.2g} exceeds "
+                f"{max_relative_error:g}, so the step does not determine it (the pressures "
+                "hardly depend on it there; use mode 'scale' or more steps nearby)"
+            )
+    if residual_rms > max_residual:
+        problems.append(
+            f"equivalent area {where}: RMS normalised residual {residual_rms:.3g} exceeds "
+            f"{max_residual:g}: the simulated step does not follow the recording (wrong "
+            "friction or input-pressure parameters, or the start temperatures?)"
+        )
     simulated = simulate(solution.x)
     pressure_errors = np.concatenate([simulated[0] - measured[0], simulated[1] - measured[1]])
     observed = np.concatenate(
@@ -306,10 +633,17 @@ def equivalent_area_for_step(
         parameters=parameters,
         standard_errors=standard_errors,
         r_squared=r_squared(solution.fun, observed),
-        residual_rms=math.sqrt(float(solution.fun @ solution.fun) / solution.fun.size),
+        residual_rms=residual_rms,
         n_points=int(solution.fun.size),
         residual_unit="-",
-        details={"evaluations": int(solution.nfev), "mode": mode},
+        details={
+            "evaluations": int(solution.nfev),
+            "mode": mode,
+            "start_temperatures [K]": temperatures,
+            "temperature_source": temperature_source,
+            "sample_period [s]": period,
+        },
+        problems=tuple(problems),
     )
     return EquivalentAreaFit(
         centered_voltage=centered,
@@ -318,4 +652,7 @@ def equivalent_area_for_step(
         fit=fit,
         pressure_rmse=math.sqrt(float(np.mean(pressure_errors**2))),
         position_rmse=math.sqrt(float(np.mean((simulated[2] - measured[2]) ** 2))),
+        start_temperatures=temperatures,
+        temperature_source=temperature_source,
+        sample_period=period,
     )

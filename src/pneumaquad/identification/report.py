@@ -8,6 +8,7 @@ with the simulator's own loader and writes it with a comment header naming the f
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import re
@@ -24,7 +25,9 @@ import tomli_w
 from pneumaquad.params import DATA_DIR, ParameterError, Problem, apply_overrides, load_rig
 
 __all__ = [
+    "MAX_RELATIVE_STANDARD_ERROR",
     "FitResult",
+    "check_standard_errors",
     "covariance_from_jacobian",
     "format_r_squared",
     "parameter_name_and_unit",
@@ -33,6 +36,9 @@ __all__ = [
     "write_parameter_file",
 ]
 
+#: Largest standard error, as a share of the value, of a parameter `check_standard_errors`
+#: accepts [-].
+MAX_RELATIVE_STANDARD_ERROR = 0.25
 _KEY_PATTERN = re.compile(r"^(?P<name>[^\[\]]+?)\s*\[(?P<unit>[^\[\]]+)\]$")
 #: Units written as plain numbers (dimensionless parameters).
 _DIMENSIONLESS = ("-", "1", "")
@@ -61,6 +67,10 @@ class FitResult:
         Unit of the residuals (``"N"``, ``"Pa"``, ...).
     details : Mapping of str to Any
         Extra information (initial values, which parameters were held, ...).
+    problems : tuple of str
+        Why the fit is not to be trusted, one sentence each naming the parameter (a
+        standard error that says the data do not determine it, a value at a bound, large
+        residuals); empty for a fit that passed its checks.
     """
 
     name: str
@@ -71,6 +81,12 @@ class FitResult:
     n_points: int
     residual_unit: str = ""
     details: Mapping[str, Any] = field(default_factory=dict)
+    problems: tuple[str, ...] = ()
+
+    @property
+    def failed(self) -> bool:
+        """True when the fit's own checks say its values are not to be trusted."""
+        return bool(self.problems)
 
     def value(self, name: str) -> float:
         """Fitted value of a parameter by its name without the unit (``"coulomb_force"``)."""
@@ -82,6 +98,38 @@ class FitResult:
     def rows(self) -> list[tuple[str, float, float]]:
         """(key, value, standard error) per parameter, for tables."""
         return [(key, value, self.standard_errors[key]) for key, value in self.parameters.items()]
+
+
+def check_standard_errors(
+    fit: FitResult, max_relative_error: float = MAX_RELATIVE_STANDARD_ERROR
+) -> FitResult:
+    """The fit with a problem added for each parameter the data do not determine.
+
+    A parameter fails when its standard error is not finite or exceeds
+    ``max_relative_error`` times its absolute value.
+
+    Parameters
+    ----------
+    fit : FitResult
+        Any fit.
+    max_relative_error : float
+        Largest acceptable standard error as a share of the value [-].
+
+    Returns
+    -------
+    FitResult
+        A copy with ``problems`` extended (the same object when nothing is added).
+    """
+    problems = []
+    for key, value, error in fit.rows():
+        if not (math.isfinite(error) and error <= max_relative_error * abs(value)):
+            problems.append(
+                f"{fit.name}: {key} = {value:.4g} has the standard error {error:.2g}, more "
+                f"than {max_relative_error:.0%} of its value: the data do not determine it"
+            )
+    if not problems:
+        return fit
+    return dataclasses.replace(fit, problems=(*fit.problems, *problems))
 
 
 def format_r_squared(value: float) -> str:
@@ -200,6 +248,8 @@ def _header(
         )
         for key, value, error in fit.rows():
             lines.append(f"#   {key} = {value:.6g} +/- {error:.2g}")
+        for problem in fit.problems:
+            lines.append(f"#   FAILED CHECK (written with --force): {problem}")
     lines.append("# keys set from the fits: " + ", ".join(updates))
     lines.append("# (comments of the base file are not carried over)")
     return "\n".join(lines) + "\n\n"

@@ -28,7 +28,13 @@ from numpy.typing import ArrayLike
 
 from pneumaquad.valve_fit import evaluate_equivalent_area, fit_equivalent_area_polynomials
 
-from .equivalent_area import AREA_MODES, EquivalentAreaFit, equivalent_area_for_step
+from .equivalent_area import (
+    AREA_MODES,
+    START_TEMPERATURE_SOURCES,
+    EquivalentAreaFit,
+    equivalent_area_for_step,
+    start_temperatures_from_hold,
+)
 from .input_pressure import (
     InputPressureCurves,
     SteadyStatePoints,
@@ -41,6 +47,7 @@ from .preprocess import IdentificationError
 
 __all__ = [
     "AREA_MODES",
+    "START_TEMPERATURE_SOURCES",
     "AreaPolynomials",
     "EquivalentAreaFit",
     "InputPressureCurves",
@@ -52,6 +59,7 @@ __all__ = [
     "fit_area_polynomials",
     "fit_input_pressure_curve",
     "input_pressure_curves",
+    "start_temperatures_from_hold",
     "steady_state_points",
 ]
 
