@@ -78,6 +78,26 @@ def test_step_run_writes_folder(tmp_path: Path) -> None:
         (("rig", "track", "wobble"), "REFERENCE"),
         (("rig", "track", "file", "--file", "missing.csv"), "missing.csv"),
         (
+            ("rig", "step", "6 V", "--set", 'cylinder.bore="1e300 in"'),
+            "cylinder.bore: '1e300 in' should be greater than 0 m and at most 10 m",
+        ),
+        (
+            ("rig", "step", "6 V", "--set", "gas.heat_capacity_ratio=1e300"),
+            "gas.heat_capacity_ratio: 1e+300 should be greater than 1 and at most 5/3",
+        ),
+        (
+            ("rig", "step", "6 V", "--set", 'rig.gravity="1e300 m/s^2"'),
+            "rig.gravity: '1e300 m/s^2' should be at least 0 m/s^2 and at most 100 m/s^2",
+        ),
+        (
+            ("rig", "step", "6 V", "--duration", "-1 s"),
+            "--duration: '-1 s' should be greater than 0 s and at most 3600 s",
+        ),
+        (
+            ("rig", "step", "6 V", "--duration", "1e300 s"),
+            "--duration: '1e300 s' should be greater than 0 s and at most 3600 s",
+        ),
+        (
             (
                 "rig",
                 "step",
@@ -201,3 +221,72 @@ def test_ctrl_c_on_the_command_line_keeps_the_recording(tmp_path: Path) -> None:
     assert 0 < recording["time [s]"].size == summary["steps"] < 3_000_000
     assert np.all(np.isfinite(recording["cap pressure [Pa]"]))
     assert read_recording(out / "recording.csv")["time [s]"].size == summary["steps"]
+
+
+def test_params_check_refuses_a_file_that_is_not_utf8(tmp_path: Path) -> None:
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(b'[meta]\nname = "B\xe9zier"\n')
+    done = run_cli("params", "check", str(path), cwd=tmp_path)
+    assert done.returncode == 2
+    assert "is not UTF-8 text (byte 0xe9 at offset 16)" in done.stderr
+    assert "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (("rig", "step", "11 V"), "VOLTAGE: '11 V' should be at least 0 V and at most 10 V"),
+        (("rig", "track", "sine", "--duration", "1e300 s"), "--duration: '1e300 s'"),
+        (("rig", "track", "chirp", "--duration", "0 s"), "--duration: '0 s'"),
+        (("rig", "track", "sine", "--frequency", "1 kHz"), "at most 500 Hz"),
+        (("rig", "track", "sine", "--amplitude", "3 in"), "at most cylinder.stroke"),
+        (("rig", "track", "step", "--dwell", "1000 s"), "at most 3600 s in all"),
+        (("rig", "track", "trapezoid", "--cycles", "1000"), "at most 3600 s in all"),
+        (("rig", "step", "6 V", "--step-time", "11 s"), "at most --duration (10 s)"),
+        (
+            ("rig", "step", "6 V", "--duration", "3600 s", "--set",
+             'simulation.control_step="1 us"'),
+            "needs 3.6e+09 control steps",
+        ),
+    ],
+)
+def test_rig_options_are_checked_before_anything_runs(tmp_path: Path, args, fragment: str,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    from typer.testing import CliRunner
+
+    from pneumaquad.cli import app
+    from pneumaquad.params import ParameterError
+
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, list(args))
+    assert isinstance(result.exception, ParameterError), result.output
+    assert fragment in str(result.exception)
+    assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (("robot", "stand", "--hold", "inf"), "inf should be at least 0 s and at most 3600 s"),
+        (("leg", "validate", "--settle", "nan"), "nan should be at least 0 s"),
+        (("leg", "foot-cycle", "--cycles", "100000"), "at most 1000"),
+        (("robot", "walk", "--distance", "100", "--speed", "0.001"), "takes 1e+05 s"),
+        (("rig", "track", "trapezoid", "--cycles", "0"), "at least 1 and at most 10000"),
+        (("serve", "dynamics", "--duration", "-1"), "should be greater than 0 s"),
+        (("serve", "dynamics", "--port", "70000"), "at most 65535"),
+        (("serve", "actuators", "--duration", "1e300"), "at most 3600 s"),
+        (("report", "--cost-table", "--duration", "inf"), "at most 3600 s"),
+        (("console", "--duration", "-5"), "greater than 0 s"),
+    ],
+)
+def test_numeric_options_are_finite_and_bounded(tmp_path: Path, args, fragment: str,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    from typer.testing import CliRunner
+
+    from pneumaquad.cli import app
+
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, list(args))
+    assert result.exit_code == 2, result.output
+    assert fragment in " ".join(result.output.replace("│", " ").split()), result.output
+    assert not (tmp_path / "runs").exists()

@@ -19,6 +19,7 @@ from pneumaquad.params import (
     list_parameter_sets,
     load_actuator,
     load_rig,
+    load_robot,
     parse_quantity,
     resolved_parameters_toml,
 )
@@ -363,3 +364,98 @@ def test_resolved_actuator_round_trip(tmp_path: Path, name: str) -> None:
     path = tmp_path / "resolved.toml"
     path.write_text(resolved_parameters_toml(actuator))
     assert load_actuator(path) == actuator
+
+
+# --- physically meaningful ranges -------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("override", "fragment"),
+    [
+        ('cylinder.bore="1e300 in"', "cylinder.bore: '1e300 in' should be greater than 0 m and "
+         "at most 10 m"),
+        ("gas.heat_capacity_ratio=1e300", "gas.heat_capacity_ratio: 1e+300 should be greater "
+         "than 1 and at most 5/3"),
+        ("gas.heat_capacity_ratio=1.0", "greater than 1 and at most 5/3"),
+        ('rig.gravity="1e300 m/s^2"', "rig.gravity: '1e300 m/s^2' should be at least 0 m/s^2 "
+         "and at most 100 m/s^2"),
+        ('supply.supply_pressure="2000 bar"', "greater than 0 Pa and at most 100 MPa"),
+        ('gas.supply_temperature="2000 K"', "greater than 0 K and less than 2000 K"),
+        ('supply.tank_volume="100 m^3"', "greater than 0 m^3 and at most 10 m^3"),
+        ('cylinder.piston_mass="2000 kg"', "at least 0 kg and at most 1000 kg"),
+        ('valve.max_voltage="1000 V"', "at least -100 V and at most 100 V"),
+        ("valve.port2.area_positive=[1.0, 0, 0, 0, 0]", "valve.port2.area_positive[0]"),
+        ('friction.static_force="1e6 N"', "at most 100000 N"),
+        ('controller.proportional_gain="-300 V/m"', "at least 0 V/m"),
+        ('simulation.control_step="10 s"', "at least 1e-06 s and at most 1 s"),
+        ("simulation.substeps=100000", "at least 1 and at most 1000"),
+        ("thermodynamics.polytropic_exponent=0.5", "at least 1 and at most 5/3"),
+        ("simulation.relative_tolerance=2.0", "greater than 0 and less than 1"),
+    ],
+)
+def test_rejects_values_outside_their_physical_range(override: str, fragment: str) -> None:
+    err = _rejects([override], fragment)
+    assert len(err.problems) == 1
+
+
+def test_range_ends_are_accepted() -> None:
+    setup = load_rig(
+        "thesis-rig",
+        [
+            "gas.heat_capacity_ratio=1.6666666666666667",
+            'rig.gravity="100 m/s^2"',
+            'cylinder.stroke="10 m"',
+            "simulation.substeps=1000",
+            'rig.load_mass="1000 kg"',
+        ],
+    )
+    assert setup.actuator.gas.heat_capacity_ratio == pytest.approx(5 / 3)
+    assert setup.rig.gravity == 100.0 and setup.actuator.cylinder.stroke == 10.0
+
+
+def test_ranges_hold_for_models_built_in_python() -> None:
+    fields = load_rig("thesis-rig").actuator.cylinder.model_dump()
+    with pytest.raises(ValueError, match="greater than 0 m and at most 10 m"):
+        CylinderParameters(**(fields | {"bore": 1e300}))
+    with pytest.raises(ValueError, match="not finite"):
+        CylinderParameters(**(fields | {"stroke": math.inf}))
+
+
+def test_every_field_states_its_range_in_its_description() -> None:
+    properties = CylinderParameters.model_json_schema()["properties"]
+    assert properties["bore"]["description"] == "finite, greater than 0 m and at most 10 m"
+    gas = RigSetup.model_json_schema()["$defs"]["GasParameters"]["properties"]
+    assert "at most 5/3" in gas["heat_capacity_ratio"]["description"]
+
+
+@pytest.mark.parametrize(
+    ("override", "fragment"),
+    [
+        ('thorax.diameter="20 m"', "thorax.diameter: '20 m' should be greater than 0 m"),
+        ('leg.gamma.upper_limit="400 deg"', "at most π rad (180°)"),
+        ("contact.ground_friction=1e9", "at least 0 and at most 10"),
+        ('simulation.control_step="0 s"', "at least 1e-06 s"),
+        ('environment.ramp_slope="80 deg"', "at most π/3 rad (60°)"),
+        ("thorax.color=[2.0, 0.0, 0.0]", "thorax.color[0]"),
+        ('linkages.alpha.moving_mass="-1 kg"', "at least 0 kg"),
+    ],
+)
+def test_robot_values_outside_their_range_are_rejected(override: str, fragment: str) -> None:
+    with pytest.raises(ParameterError) as info:
+        load_robot("crr-quadruped", [override])
+    assert fragment in str(info.value), str(info.value)
+
+
+def test_shipped_robot_set_loads() -> None:
+    robot = load_robot("crr-quadruped")
+    assert robot.simulation.control_step == 0.001
+
+
+def test_rejects_file_that_is_not_utf8(tmp_path: Path) -> None:
+    path = tmp_path / "latin1.toml"
+    path.write_bytes('[meta]\nname = "Bézier"\n'.encode("latin-1"))
+    with pytest.raises(ParameterError) as info:
+        load_rig(path)
+    message = str(info.value)
+    assert "is not UTF-8 text (byte 0xe9 at offset 16)" in message
+    assert str(path) in message

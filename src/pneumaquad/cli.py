@@ -10,18 +10,23 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from pneumaquad.cli_common import (
+    MAX_SIMULATED_TIME,
     OutputOption,
     ParamsOption,
     SetOption,
+    check_step_count,
     console,
     finish_run,
+    option_range,
     progress_bar,
     quantity,
+    simulated_duration,
 )
 from pneumaquad.params import (
     ParameterError,
@@ -30,15 +35,16 @@ from pneumaquad.params import (
     resolved_parameters_toml,
 )
 from pneumaquad.params.loader import load_actuator
+from pneumaquad.params.schema import Bounds, RigSetup
 from pneumaquad.recording import create_run_folder
 from pneumaquad.rig import signals
 from pneumaquad.rig.experiment import run_rig_experiment
 from pneumaquad.rig.signals import RecordedReferenceError
-from pneumaquad.rig.simulate import ReferenceSolverError
+from pneumaquad.rig.simulate import ReferenceSolverError, RigDivergedError
 from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.video import VideoError
 
-USER_ERRORS = (ParameterError, RecordedReferenceError, ReferenceSolverError)
+USER_ERRORS = (ParameterError, RecordedReferenceError, ReferenceSolverError, RigDivergedError)
 
 app = typer.Typer(
     help="pneumaquad: simulator for pneumatically actuated legged robots.",
@@ -100,14 +106,15 @@ def rig_step(
 ) -> None:
     """Open-loop voltage step with the thesis protocol (opposite saturation, then the step)."""
     setup = load_rig(params, overrides or [])
-    command = quantity(voltage, "voltage", "VOLTAGE")
+    command = valve_voltage(voltage, setup)
     valve = setup.actuator.valve
-    if not valve.min_voltage <= command <= valve.max_voltage:
-        raise ParameterError.single(
-            "VOLTAGE", voltage, f"within [{valve.min_voltage:g}, {valve.max_voltage:g}] V"
-        )
-    at = quantity(step_time, "time", "--step-time")
-    total = quantity(duration, "time", "--duration")
+    total = simulated_duration(duration, "--duration", setup.simulation.control_step)
+    at = quantity(
+        step_time,
+        "time",
+        "--step-time",
+        Bounds(0.0, total, "s", lower_inclusive=True, upper_text=f"--duration ({total:g} s)"),
+    )
     signal = signals.thesis_step_command(
         command,
         valve.offset_voltage,
@@ -218,7 +225,13 @@ def rig_track(
     ] = "0.4 in,1.4 in,0.6 in,1.2 in,0.875 in",
     dwell: Annotated[str, typer.Option(help="Time per level (step); hold (trapezoid).")] = "2 s",
     ramp: Annotated[str, typer.Option(help="Ramp time (trapezoid).")] = "1 s",
-    cycles: Annotated[int, typer.Option(help="Cycles (trapezoid).")] = 2,
+    cycles: Annotated[
+        int,
+        typer.Option(
+            help="Cycles (trapezoid), 1 to 10000.",
+            callback=option_range(Bounds(1, 10000, lower_inclusive=True)),
+        ),
+    ] = 2,
     file: Annotated[Path | None, typer.Option(help="CSV or .mat reference (file).")] = None,
     time_column: Annotated[str, typer.Option(help="Time column in --file [s].")] = "time",
     position_column: Annotated[str, typer.Option(help="Position column in --file.")] = "position",
@@ -226,10 +239,9 @@ def rig_track(
 ) -> None:
     """Closed-loop position tracking with the PID of the parameter file."""
     setup = load_rig(params, overrides or [])
-    dt = setup.simulation.control_step
     signal = build_reference(
         reference,
-        dt,
+        setup,
         mean,
         amplitude,
         frequency,
@@ -252,59 +264,108 @@ def rig_track(
     finish_run(folder, summary)
 
 
+def valve_voltage(text: str, setup: RigSetup) -> float:
+    """The VOLTAGE argument [V]: a voltage within the valve's [min_voltage, max_voltage]."""
+    valve = setup.actuator.valve
+    return quantity(
+        text,
+        "voltage",
+        "VOLTAGE",
+        Bounds(valve.min_voltage, valve.max_voltage, "V", lower_inclusive=True),
+    )
+
+
 def build_reference(
-    reference,
-    dt,
-    mean,
-    amplitude,
-    frequency,
-    end_frequency,
-    duration,
-    levels,
-    dwell,
-    ramp,
-    cycles,
-    file,
-    time_column,
-    position_column,
-    position_unit,
-):
-    """Position reference [m] per control step for ``rig track``."""
-    builders: dict[str, Callable[[], object]] = {
-        "sine": lambda: signals.sine(
-            quantity(mean, "length", "--mean"),
-            quantity(amplitude, "length", "--amplitude"),
-            quantity(frequency, "frequency", "--frequency"),
-            quantity(duration, "time", "--duration"),
-            dt,
-        ),
-        "chirp": lambda: signals.chirp(
-            quantity(mean, "length", "--mean"),
-            quantity(amplitude, "length", "--amplitude"),
-            quantity(frequency, "frequency", "--frequency"),
-            quantity(end_frequency, "frequency", "--end-frequency"),
-            quantity(duration, "time", "--duration"),
-            dt,
-        ),
-        "step": lambda: signals.step_train(
-            [quantity(level, "length", "--levels") for level in levels.split(",")],
-            quantity(dwell, "time", "--dwell"),
-            dt,
-        ),
-        "trapezoid": lambda: signals.trapezoid(
-            *[quantity(level, "length", "--levels") for level in levels.split(",")[:2]],
-            quantity(ramp, "time", "--ramp"),
-            quantity(dwell, "time", "--dwell"),
-            cycles,
-            dt,
-        ),
-        "file": lambda: signals.recorded_reference(
+    reference: str,
+    setup: RigSetup,
+    mean: str,
+    amplitude: str,
+    frequency: str,
+    end_frequency: str,
+    duration: str,
+    levels: str,
+    dwell: str,
+    ramp: str,
+    cycles: int,
+    file: Path | None,
+    time_column: str,
+    position_column: str,
+    position_unit: str,
+) -> np.ndarray:
+    """Position reference [m] per control step for ``rig track``.
+
+    Every option is checked before anything is built: positions within [0, stroke],
+    frequencies in (0, the Nyquist frequency of the control step], times positive and at
+    most an hour, and the whole reference at most an hour of simulated time.
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, its text and what was expected.
+    """
+    dt = setup.simulation.control_step
+    stroke = setup.actuator.cylinder.stroke
+    position = Bounds(0.0, stroke, "m", lower_inclusive=True,
+                      upper_text=f"cylinder.stroke ({stroke:g} m)")
+    nyquist = 0.5 / dt
+    rate = Bounds(0.0, nyquist, "Hz", upper_text=f"{nyquist:g} Hz (half the control rate)")
+    span = Bounds(0.0, MAX_SIMULATED_TIME, "s")
+    ramp_span = Bounds(0.0, MAX_SIMULATED_TIME, "s", lower_inclusive=True)
+
+    def length(text: str, option: str) -> float:
+        return quantity(text, "length", option, position)
+
+    def level_list(count: int | None = None) -> list[float]:
+        return [length(level, "--levels") for level in levels.split(",")[:count]]
+
+    def total_time(seconds: float, option: str, shown: str) -> None:
+        if seconds > MAX_SIMULATED_TIME:
+            raise ParameterError.single(
+                option, shown, f"a reference of at most {MAX_SIMULATED_TIME:g} s in all "
+                f"(this one lasts {seconds:.4g} s)")
+        check_step_count(seconds, dt, option, shown)
+
+    def sine() -> np.ndarray:
+        middle, swing = length(mean, "--mean"), length(amplitude, "--amplitude")
+        start = quantity(frequency, "frequency", "--frequency", rate)
+        seconds = simulated_duration(duration, "--duration", dt)
+        return signals.sine(middle, swing, start, seconds, dt)
+
+    def chirp() -> np.ndarray:
+        middle, swing = length(mean, "--mean"), length(amplitude, "--amplitude")
+        start = quantity(frequency, "frequency", "--frequency", rate)
+        end = quantity(end_frequency, "frequency", "--end-frequency", rate)
+        seconds = simulated_duration(duration, "--duration", dt)
+        return signals.chirp(middle, swing, start, end, seconds, dt)
+
+    def step() -> np.ndarray:
+        values = level_list()
+        hold = quantity(dwell, "time", "--dwell", span)
+        total_time(hold * len(values), "--dwell", dwell)
+        return signals.step_train(values, hold, dt)
+
+    def trapezoid() -> np.ndarray:
+        low, high = level_list(2)
+        ramp_time = quantity(ramp, "time", "--ramp", ramp_span)
+        hold = quantity(dwell, "time", "--dwell", span)
+        total_time(2.0 * (ramp_time + hold) * cycles, "--cycles", str(cycles))
+        return signals.trapezoid(low, high, ramp_time, hold, cycles, dt)
+
+    def recorded() -> np.ndarray:
+        return signals.recorded_reference(
             file if file is not None else Path(""),
             time_column,
             position_column,
             quantity(f"1 {position_unit}", "length", "--position-unit"),
             dt,
-        ),
+        )
+
+    builders: dict[str, Callable[[], np.ndarray]] = {
+        "sine": sine,
+        "chirp": chirp,
+        "step": step,
+        "trapezoid": trapezoid,
+        "file": recorded,
     }
     if reference not in builders:
         raise ParameterError.single(

@@ -4,7 +4,7 @@ Sub-command modules (``cli_robot``, ``cli_serve``, ...) import from here, never 
 :mod:`pneumaquad.cli`, which registers them; so any of them can be imported first.
 """
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
@@ -13,17 +13,37 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-from pneumaquad.params import parse_quantity
+from pneumaquad.params import ParameterError, Problem, parse_quantity
+from pneumaquad.params.schema import Bounds
 
 __all__ = [
+    "MAX_CONTROL_STEPS",
+    "MAX_SIMULATED_TIME",
+    "MAX_WALL_TIME",
+    "SIMULATED_DURATION",
+    "WALL_DURATION",
     "OutputOption",
     "ParamsOption",
     "SetOption",
+    "check_step_count",
     "console",
     "finish_run",
+    "option_range",
     "progress_bar",
     "quantity",
+    "simulated_duration",
 ]
+
+#: Longest simulated time of one run [s] (one hour).
+MAX_SIMULATED_TIME = 3600.0
+#: Longest wall-clock time a server or the console may be told to run [s] (one day).
+MAX_WALL_TIME = 86400.0
+#: Most control steps of one run (memory for the recording stays below a few GB).
+MAX_CONTROL_STEPS = 10_000_000
+#: Range of a simulated duration option: (0, 3600 s].
+SIMULATED_DURATION = Bounds(0.0, MAX_SIMULATED_TIME, "s")
+#: Range of a wall-clock duration option: (0, 86400 s].
+WALL_DURATION = Bounds(0.0, MAX_WALL_TIME, "s")
 
 console = Console(stderr=True)
 
@@ -57,9 +77,73 @@ def progress_bar(label: str) -> Iterator:
         yield update
 
 
-def quantity(text: str, kind: str, option: str) -> float:
-    """Parse a command-line quantity such as "0.4 in" to SI (raises ParameterError)."""
-    return parse_quantity(text, kind, option)
+def quantity(text: str, kind: str, option: str, bounds: Bounds | None = None) -> float:
+    """Parse a command-line quantity such as "0.4 in" to SI.
+
+    Parameters
+    ----------
+    text : str
+        The option's text, a number with a unit.
+    kind : str
+        Kind of quantity (``"time"``, ``"length"``, ...; see ``pneumaquad.params.units``).
+    option : str
+        Option name for the message (``"--duration"``).
+    bounds : Bounds, optional
+        Range the SI value must lie in (it is always finite).
+
+    Returns
+    -------
+    float
+        The SI value.
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, the text and what was expected.
+    """
+    value = parse_quantity(text, kind, option)
+    if bounds is not None and not bounds.contains(value):
+        raise ParameterError([Problem(option, text, f"should be {bounds.expectation}")])
+    return value
+
+
+def simulated_duration(text: str, option: str, control_step: float) -> float:
+    """A simulated duration option [s]: in (0, 3600 s] and at most 10 million control steps.
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, the text and the allowed range.
+    """
+    value = quantity(text, "time", option, SIMULATED_DURATION)
+    check_step_count(value, control_step, option, text)
+    return value
+
+
+def check_step_count(duration: float, control_step: float, option: str, shown: str) -> None:
+    """Refuse a simulated ``duration`` [s] of more than :data:`MAX_CONTROL_STEPS` steps."""
+    steps = duration / control_step
+    if steps > MAX_CONTROL_STEPS:
+        raise ParameterError([Problem(
+            option, shown, f"needs {steps:.3g} control steps of {control_step:g} s; expected "
+            f"at most {MAX_CONTROL_STEPS:,} steps (a shorter run or a longer "
+            "simulation.control_step)")])
+
+
+def option_range(bounds: Bounds) -> Callable[[float | int | None], float | int | None]:
+    """Typer callback for a plain-number option: finite and within ``bounds``.
+
+    The usage error names the option, the value and the range, e.g. ``Invalid value for
+    '--hold': inf should be at least 0 s and at most 3600 s``; it ends with exit status 2
+    before the command runs.
+    """
+
+    def check(value: float | int | None) -> float | int | None:
+        if value is not None and not bounds.contains(float(value)):
+            raise typer.BadParameter(f"{value:g} should be {bounds.expectation}")
+        return value
+
+    return check
 
 
 def finish_run(folder: Path, summary: dict) -> None:

@@ -14,9 +14,10 @@ from typing import Annotated
 
 import typer
 
-from pneumaquad.cli_common import console, progress_bar
+from pneumaquad.cli_common import MAX_SIMULATED_TIME, console, option_range, progress_bar
 from pneumaquad.measured import MeasuredDataError
 from pneumaquad.params import ParameterError
+from pneumaquad.params.schema import Bounds
 from pneumaquad.reporting.run_folder import ReportError
 
 __all__ = ["REPORT_ERRORS", "report_command"]
@@ -45,7 +46,11 @@ def report_command(
         typer.Option("--mapping", help="TOML column mapping of the measured recording."),
     ] = None,
     time_offset: Annotated[
-        float, typer.Option("--time-offset", help="Added to the measured time stamps [s].")
+        float,
+        typer.Option("--time-offset", help="Added to the measured time stamps [s], "
+                     "-86400 to 86400.",
+                     callback=option_range(Bounds(-86400.0, 86400.0, "s",
+                                                  lower_inclusive=True))),
     ] = 0.0,
     output: Annotated[
         Path | None,
@@ -60,9 +65,13 @@ def report_command(
     params: Annotated[
         str, typer.Option("--params", "-p", help="Rig parameter set for --cost-table.")
     ] = "thesis-rig",
-    repeats: Annotated[int, typer.Option(min=2, help="--cost-table: timed repeats.")] = 15,
+    repeats: Annotated[int, typer.Option(
+        help="--cost-table: timed repeats, 2 to 1000.",
+        callback=option_range(Bounds(2, 1000, lower_inclusive=True)))] = 15,
     duration: Annotated[
-        float, typer.Option(min=0.1, help="--cost-table: simulated time per run [s].")
+        float, typer.Option(help="--cost-table: simulated time per run [s], 0.1 to 3600.",
+                            callback=option_range(Bounds(0.1, MAX_SIMULATED_TIME, "s",
+                                                         lower_inclusive=True)))
     ] = 4.0,
 ) -> None:
     """Write report.html (self-contained, figures embedded) and the PNGs of a run folder,

@@ -7,14 +7,24 @@ its key figures, and optionally renders a video offscreen.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
 import numpy as np
 import typer
 
-from pneumaquad.cli_common import OutputOption, SetOption, console, finish_run, progress_bar
+from pneumaquad.cli_common import (
+    MAX_SIMULATED_TIME,
+    OutputOption,
+    SetOption,
+    console,
+    finish_run,
+    option_range,
+    progress_bar,
+)
 from pneumaquad.params import JOINT_NAMES, load_robot
+from pneumaquad.params.schema import Bounds
 
 leg_app = typer.Typer(
     help="The front-right leg on a fixed thorax (thesis 5.5.2 validation set-up).",
@@ -28,6 +38,14 @@ RobotParamsOption = Annotated[
 ]
 EnvironmentOption = Annotated[str, typer.Option(help="flat, block, ramp or rough.")]
 SeedOption = Annotated[int, typer.Option(help="Seed of the rough terrain.")]
+#: A phase of simulated time [s] in [0, 3600 s].
+PHASE_TIME = Bounds(0.0, MAX_SIMULATED_TIME, "s", lower_inclusive=True)
+
+
+def _within(lower: float, upper: float,
+            unit: str = "") -> Callable[[float | int | None], float | int | None]:
+    """Typer callback: a finite number within [lower, upper] (see :class:`Bounds`)."""
+    return option_range(Bounds(lower, upper, unit, lower_inclusive=True))
 VideoOption = Annotated[
     bool, typer.Option("--video/--no-video", help="Render video.mp4, a GIF and first-frame.png.")
 ]
@@ -119,7 +137,9 @@ def leg_validate(
     signal: Annotated[
         str, typer.Option(help="steps, trapezoid, slow-sine, fast-sine, or all.")
     ] = "steps",
-    settle: Annotated[float, typer.Option(help="Open-loop extension phase [s].")] = 2.0,
+    settle: Annotated[float, typer.Option(
+        help="Open-loop extension phase [s], 0 to 3600.", callback=option_range(PHASE_TIME))
+    ] = 2.0,
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
     output: OutputOption = None,
@@ -155,9 +175,11 @@ def leg_validate(
 @leg_app.command("foot-cycle")
 def leg_foot_cycle(
     rate: Annotated[str, typer.Option(help="slow, medium, fast or all.")] = "all",
-    cycles: Annotated[int, typer.Option(min=1, help="Cycles per rate.")] = 3,
+    cycles: Annotated[int, typer.Option(help="Cycles per rate, 1 to 1000.",
+                                        callback=_within(1, 1000))] = 3,
     alpha_gain_scale: Annotated[
-        float, typer.Option(min=0.0, help="Alpha PID gain scale (thesis: 0.75).")
+        float, typer.Option(help="Alpha PID gain scale (thesis: 0.75), 0 to 100.",
+                            callback=_within(0.0, 100.0))
     ] = 1.0,
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
@@ -180,7 +202,8 @@ def leg_foot_cycle(
 
 @robot_app.command("stand")
 def robot_stand(
-    hold: Annotated[float, typer.Option(min=0.0, help="Holding time after rising [s].")] = 3.0,
+    hold: Annotated[float, typer.Option(help="Holding time after rising [s], 0 to 3600.",
+                                        callback=option_range(PHASE_TIME))] = 3.0,
     posture: Annotated[
         bool, typer.Option("--posture/--no-posture", help="Body height/roll/pitch commands.")
     ] = True,
@@ -212,29 +235,35 @@ def robot_stand(
 
 @robot_app.command("walk")
 def robot_walk(
-    distance: Annotated[float, typer.Option(min=0.01, help="Distance to walk [m].")] = 1.0,
-    speed: Annotated[float, typer.Option(min=0.001, help="Body speed [m/s].")] = 0.02,
-    heading: Annotated[float, typer.Option(help="Walking direction, CCW from forward [deg].")]
-    = 0.0,
-    duty_factor: Annotated[float, typer.Option(min=0.75, max=0.99, help="Stance fraction.")]
-    = 0.9,
-    period: Annotated[float, typer.Option(min=0.5, help="Gait cycle [s].")] = 8.0,
-    margin: Annotated[float, typer.Option(min=0.0, help="Planned static margin [m].")] = 0.06,
-    step_height: Annotated[float, typer.Option(min=0.0, help="Foot lift at mid-swing [m].")]
-    = 0.04,
+    distance: Annotated[float, typer.Option(help="Distance to walk [m], 0.01 to 100.",
+                                            callback=_within(0.01, 100.0, "m"))] = 1.0,
+    speed: Annotated[float, typer.Option(help="Body speed [m/s], 0.001 to 1.",
+                                         callback=_within(0.001, 1.0, "m/s"))] = 0.02,
+    heading: Annotated[float, typer.Option(
+        help="Walking direction, CCW from forward [deg], -360 to 360.",
+        callback=_within(-360.0, 360.0, "deg"))] = 0.0,
+    duty_factor: Annotated[float, typer.Option(help="Stance fraction, 0.75 to 0.99.",
+                                               callback=_within(0.75, 0.99))] = 0.9,
+    period: Annotated[float, typer.Option(help="Gait cycle [s], 0.5 to 600.",
+                                          callback=_within(0.5, 600.0, "s"))] = 8.0,
+    margin: Annotated[float, typer.Option(help="Planned static margin [m], 0 to 1.",
+                                          callback=_within(0.0, 1.0, "m"))] = 0.06,
+    step_height: Annotated[float, typer.Option(help="Foot lift at mid-swing [m], 0 to 0.5.",
+                                               callback=_within(0.0, 0.5, "m"))] = 0.04,
     lift_fraction: Annotated[float, typer.Option(
-        min=0.0, max=0.49, help="Share of the swing, at each end, spent only lifting or "
-        "lowering the foot.")] = 0.25,
+        callback=_within(0.0, 0.49), help="Share of the swing, at each end, spent only "
+        "lifting or lowering the foot, 0 to 0.49.")] = 0.25,
     transfer_gap: Annotated[float, typer.Option(
-        min=0.0, max=0.5, help="Cycle fraction with four feet down between a rear "
-        "touchdown and the front lift-off (load transfer).")] = 0.04,
+        callback=_within(0.0, 0.5), help="Cycle fraction with four feet down between a rear "
+        "touchdown and the front lift-off (load transfer), 0 to 0.5.")] = 0.04,
     stance_control: Annotated[bool, typer.Option(
         "--stance-control/--no-stance-control",
         help="Force-controlled stance: each stance leg's cylinders track the load "
              "statics gives it (robot.stance_control); off: plain position control.")]
     = True,
     force_gain: Annotated[float, typer.Option(
-        min=1e-6, help="Force tracking gain of the stance cylinders [V/N].")] = 0.01,
+        callback=_within(1e-6, 1.0, "V/N"),
+        help="Force tracking gain of the stance cylinders [V/N], 1e-6 to 1.")] = 0.01,
     swing_from_ground: Annotated[bool, typer.Option(
         "--swing-from-ground/--swing-from-body",
         help="Swing height above the ground at lift-off (robot.swing_control), or "
@@ -258,6 +287,10 @@ def robot_walk(
     from pneumaquad.robot.walking import WalkSettings, walking_outcome, walking_phases
 
     _check_environment(environment)
+    if distance / speed > MAX_SIMULATED_TIME:
+        raise typer.BadParameter(
+            f"walking {distance:g} m at {speed:g} m/s takes {distance / speed:.4g} s; expected "
+            f"at most {MAX_SIMULATED_TIME:g} s of walking", param_hint="--distance / --speed")
     largest_gap = 2.0 * duty_factor - 1.5
     if transfer_gap > largest_gap + 1e-12:
         raise typer.BadParameter(
@@ -364,9 +397,12 @@ def robot_geometry(
 
 def video_command(
     run: Annotated[Path, typer.Argument(help="Run folder with model.xml and trajectory.npz.")],
-    fps: Annotated[int, typer.Option(min=1)] = 30,
-    width: Annotated[int, typer.Option(min=16)] = 640,
-    height: Annotated[int, typer.Option(min=16)] = 480,
+    fps: Annotated[int, typer.Option(help="Frames per second, 1 to 240.",
+                                     callback=_within(1, 240))] = 30,
+    width: Annotated[int, typer.Option(help="Pixels, 16 to 7680.",
+                                       callback=_within(16, 7680))] = 640,
+    height: Annotated[int, typer.Option(help="Pixels, 16 to 4320.",
+                                        callback=_within(16, 4320))] = 480,
 ) -> None:
     """Render a robot run offscreen to MP4, a GIF preview and first-frame.png."""
     _render(run, fps, width, height)

@@ -17,7 +17,17 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from pneumaquad.cli_common import OutputOption, SetOption, console
+from pneumaquad.cli_common import (
+    SIMULATED_DURATION,
+    WALL_DURATION,
+    OutputOption,
+    SetOption,
+    check_step_count,
+    console,
+    option_range,
+)
+from pneumaquad.params import ParameterError
+from pneumaquad.params.schema import Bounds
 
 serve_app = typer.Typer(help="Networked co-simulation over UDP (thesis ch. 5.1-5.3).",
                         no_args_is_help=True)
@@ -36,7 +46,7 @@ def _fail(message: str) -> None:
 
 
 def _robot(params: str, overrides: list[str] | None, configuration: str):
-    from pneumaquad.params import ParameterError, load_robot
+    from pneumaquad.params import load_robot
     from pneumaquad.robot.builder import CONFIGURATIONS, build_robot
 
     if configuration not in CONFIGURATIONS:
@@ -72,10 +82,16 @@ def _print(summary: dict, keys: tuple[str, ...]) -> None:
             console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
 
 
+#: Longest reply or command timeout [s].
+MAX_NETWORK_TIMEOUT = 60.0
+PORT_RANGE = Bounds(0, 65535, lower_inclusive=True)
+TIMEOUT_RANGE = Bounds(0.0, MAX_NETWORK_TIMEOUT, "s")
+
 BusyWaitOption = Annotated[
     float,
-    typer.Option(min=0.0, help="Poll this long [s] before sleeping while waiting for a "
-                 "datagram: lower, steadier latency for a busier core (0 = sleep at once)."),
+    typer.Option(callback=option_range(Bounds(0.0, 1.0, "s", lower_inclusive=True)),
+                 help="Poll this long [s] before sleeping while waiting for a datagram: "
+                 "lower, steadier latency for a busier core (0 = sleep at once; at most 1)."),
 ]
 
 
@@ -89,14 +105,20 @@ def serve_dynamics(
     mode: Annotated[str, typer.Option(help="lockstep (step per command) or realtime.")]
     = "lockstep",
     bind: Annotated[str, typer.Option(help="Local address to listen on.")] = "127.0.0.1",
-    port: Annotated[int, typer.Option(help="UDP port (0: any free one).")] = 47000,
+    port: Annotated[int, typer.Option(help="UDP port (0: any free one).",
+                                      callback=option_range(PORT_RANGE))] = 47000,
     peer: Annotated[str | None, typer.Option(help="Accept only HOST:PORT.")] = None,
-    timeout: Annotated[float, typer.Option(help="Realtime: command timeout [s].")] = 0.1,
-    duration: Annotated[float | None, typer.Option(help="Wall-clock limit [s].")] = None,
+    timeout: Annotated[float, typer.Option(help="Realtime: command timeout [s], up to 60.",
+                                           callback=option_range(TIMEOUT_RANGE))] = 0.1,
+    duration: Annotated[float | None, typer.Option(
+        help="Wall-clock limit [s], up to 86400.", callback=option_range(WALL_DURATION))
+    ] = None,
     busy_wait: BusyWaitOption = 0.002,
     posture: Annotated[str, typer.Option(help="Initial alpha,beta,gamma of every leg [deg].")]
     = "0,-30,60",
-    record_every: Annotated[int, typer.Option(help="Record every n-th control step.")] = 1,
+    record_every: Annotated[int, typer.Option(
+        help="Record every n-th control step, 1 to 1000000.",
+        callback=option_range(Bounds(1, 1_000_000, lower_inclusive=True)))] = 1,
     layout: Annotated[
         str, typer.Option(help="pnqd (docs/protocol.md) or thesis (App. C.2.4: 21 doubles, "
                           "R1 torques in, lockstep).")
@@ -119,8 +141,6 @@ def serve_dynamics(
         _fail(f"--command {command!r}: expected one of {', '.join(COMMAND_KINDS)}")
     if mode not in MODES:
         _fail(f"--mode {mode!r}: expected one of {', '.join(MODES)}")
-    if not timeout > 0 or record_every < 1 or (duration is not None and not duration > 0):
-        _fail("--timeout and --duration must be > 0, --record-every >= 1")
     robot = _robot(params, overrides, configuration)
     peer_address = None if peer is None else _address(peer, "--peer")
     try:
@@ -140,8 +160,9 @@ def serve_dynamics(
         summary = server.run(request)
     _print(summary, ("control steps [count]", "simulated time [s]", "wall time [s]",
                      "malformed [count]", "duplicates [count]", "reordered [count]",
-                     "foreign [count]", "timeouts [count]", "achieved rate [Hz]",
-                     "jitter p99 [s]", "overruns [count]"))
+                     "foreign [count]", "timeouts [count]", "refused hellos [count]",
+                     "clamped commands [count]", "achieved rate [Hz]", "jitter p99 [s]",
+                     "overruns [count]"))
     if request.requested:
         console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
         raise typer.Exit(130)
@@ -184,29 +205,35 @@ def serve_actuators(
     configuration: ConfigurationOption = "fixed",
     experiment: Annotated[str, typer.Option(help="hold, gamma-step or gamma-sine.")]
     = "gamma-step",
-    settle: Annotated[float, typer.Option(help="Hold before the motion [s].")] = 0.5,
-    duration: Annotated[float, typer.Option(help="Simulated time [s].")] = 1.0,
-    reply_timeout: Annotated[float, typer.Option(help="Wait for a STATE before resending [s].")]
-    = 0.05,
+    settle: Annotated[float, typer.Option(
+        help="Hold before the motion [s], 0 to 3600.",
+        callback=option_range(Bounds(0.0, 3600.0, "s", lower_inclusive=True)))] = 0.5,
+    duration: Annotated[float, typer.Option(help="Simulated time [s], up to 3600.",
+                                            callback=option_range(SIMULATED_DURATION))] = 1.0,
+    reply_timeout: Annotated[float, typer.Option(
+        help="Wait for a STATE before resending [s], up to 60.",
+        callback=option_range(TIMEOUT_RANGE))] = 0.05,
     busy_wait: BusyWaitOption = 0.002,
     output: OutputOption = None,
 ) -> None:
     """Run cylinders, valves and controllers against a dynamics server (lockstep)."""
     from pneumaquad.interruption import deferred_interrupt
     from pneumaquad.network.actuator_side import ActuatorSide
-    from pneumaquad.network.client import ActuatorClient, NoReplyError
+    from pneumaquad.network.client import ActuatorClient, NoReplyError, SessionMismatchError
     from pneumaquad.network.experiments import EXPERIMENTS, make_experiment
     from pneumaquad.recording import create_run_folder
 
     if experiment not in EXPERIMENTS:
         _fail(f"--experiment {experiment!r}: expected one of {', '.join(EXPERIMENTS)}")
-    if not duration > 0 or not reply_timeout > 0 or settle < 0:
-        _fail("--duration and --reply-timeout must be > 0, --settle >= 0")
     address = _address(dynamics, "--dynamics")
     robot = _robot(params, overrides, configuration)
     try:
         side = ActuatorSide(robot)
     except ValueError as error:
+        _fail(str(error))
+    try:
+        check_step_count(duration, side.control_step, "--duration", f"{duration:g}")
+    except ParameterError as error:
         _fail(str(error))
     folder: Path = create_run_folder(output, f"serve-actuators-{experiment}")
     client = ActuatorClient(side, address, reply_timeout=reply_timeout, folder=folder,
@@ -226,6 +253,8 @@ def serve_actuators(
             client.bye()
     except NoReplyError as error:
         _fail(f"{error} (is `pneumaquad serve dynamics --command force` running there?)")
+    except SessionMismatchError as error:
+        _fail(str(error))
     finally:
         client.close()
     console.print(f"run folder: [bold]{folder}[/bold]")

@@ -11,10 +11,13 @@ from typing import Annotated
 
 import typer
 
-from pneumaquad.cli_common import SetOption, console
+from pneumaquad.cli_common import WALL_DURATION, SetOption, console, option_range
 from pneumaquad.interruption import deferred_interrupt
+from pneumaquad.params.schema import Bounds
 
 __all__ = ["console_command", "serve_console"]
+
+_PORT_RANGE = Bounds(0, 65535, lower_inclusive=True)
 
 
 def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped",
@@ -89,9 +92,11 @@ def console_command(
     host: Annotated[
         str, typer.Option(help="Interface to bind (loopback by default; no authentication).")
     ] = "127.0.0.1",
-    port: Annotated[int, typer.Option(help="TCP port (0: any free port).")] = 8080,
+    port: Annotated[int, typer.Option(help="TCP port (0: any free port).",
+                                      callback=option_range(_PORT_RANGE))] = 8080,
     duration: Annotated[
-        float | None, typer.Option(help="Stop after this many wall-clock seconds.")
+        float | None, typer.Option(help="Stop after this many wall-clock seconds (up to "
+                                   "86400).", callback=option_range(WALL_DURATION))
     ] = None,
     start: Annotated[bool, typer.Option("--start/--paused", help="Run at once.")] = False,
     overrides: SetOption = None,
@@ -100,7 +105,8 @@ def console_command(
     ] = None,
     device_port: Annotated[
         int | None,
-        typer.Option("--device-port", help="UDP port for external input devices (0: any)."),
+        typer.Option("--device-port", help="UDP port for external input devices (0: any).",
+                     callback=option_range(_PORT_RANGE)),
     ] = None,
 ) -> None:
     """Operator console in the browser: live 3-D robot, run controls, teleoperation."""

@@ -1,5 +1,10 @@
 """The actuator client: an :class:`ActuatorSide` driving a remote dynamics server in lockstep.
 
+The session starts with ``HELLO``: the server answers with its own ``HELLO`` (joint count
+and control step, read into :attr:`ActuatorClient.server_joint_count` and
+:attr:`ActuatorClient.server_control_step`) and its current ``STATE``; dimensions other
+than this side's end the session with :class:`SessionMismatchError`.
+
 The loop is the thesis's split seen from the Simulink side (Daepp 2011, ch. 5.1): send
 the cylinder forces (``FORCE_COMMAND``, sender time = the simulation time at which they
 take effect), wait for the ``STATE`` that answers them, compute the next forces. When no
@@ -19,7 +24,14 @@ import numpy as np
 from pneumaquad.network.actuator_side import ActuatorSide
 from pneumaquad.network.endpoint import DEFAULT_HOST, Address, UdpEndpoint
 from pneumaquad.network.experiments import Experiment
-from pneumaquad.network.protocol import encode_bye, encode_command, encode_hello
+from pneumaquad.network.protocol import (
+    STEP_TOLERANCE,
+    ProtocolError,
+    encode_bye,
+    encode_command,
+    encode_hello,
+    hello_parameters,
+)
 from pneumaquad.network.run_output import (
     NetworkRecording,
     write_network_files,
@@ -27,13 +39,17 @@ from pneumaquad.network.run_output import (
 )
 from pneumaquad.network.server import StopFlag
 from pneumaquad.network.state import StateMessage, state_from_values
-from pneumaquad.network.wire import MessageType
+from pneumaquad.network.wire import Message, MessageType
 
-__all__ = ["ActuatorClient", "NoReplyError"]
+__all__ = ["ActuatorClient", "NoReplyError", "SessionMismatchError"]
 
 
 class NoReplyError(ConnectionError):
     """The dynamics server did not answer within the retry budget."""
+
+
+class SessionMismatchError(ConnectionError):
+    """The dynamics server announced a joint count or control step other than this side's."""
 
 
 class ActuatorClient:
@@ -67,6 +83,9 @@ class ActuatorClient:
         self.folder = None if folder is None else Path(folder)
         self.resends = 0  # commands sent again after a reply timeout [count]
         self.steps = 0
+        #: Joint count and control step [s] the server announced in its HELLO.
+        self.server_joint_count: int | None = None
+        self.server_control_step: float | None = None
         self.states: list[StateMessage] = []
         self.summary: dict[str, Any] = {}
 
@@ -82,6 +101,8 @@ class ActuatorClient:
             deadline = time.perf_counter() + self.reply_timeout
             while (remaining := deadline - time.perf_counter()) > 0:
                 for message, _ in self.endpoint.receive(remaining):
+                    if message.type == MessageType.HELLO:
+                        self._read_server_hello(message)
                     if message.type != MessageType.STATE:
                         continue
                     state = state_from_values(np.asarray(message.values), self.side.joint_count)
@@ -89,13 +110,38 @@ class ActuatorClient:
                         return state
         raise NoReplyError(f"no STATE from {self.dynamics} after {self.max_retries} resends")
 
+    def _read_server_hello(self, hello: Message) -> None:
+        """Take the server's dimensions from its ``HELLO``; refuse other ones than ours."""
+        try:
+            joints, step = hello_parameters(hello)
+        except ProtocolError:
+            return  # the endpoint drops invalid HELLOs already
+        self.server_joint_count, self.server_control_step = joints, step
+        same_step = abs(step - self.side.control_step) <= STEP_TOLERANCE * step
+        if joints != self.side.joint_count or not same_step:
+            raise SessionMismatchError(
+                f"the dynamics server at {self.dynamics[0]}:{self.dynamics[1]} simulates "
+                f"{joints} joints with a {step:g} s control step; this actuator side has "
+                f"{self.side.joint_count} joints and a {self.side.control_step:g} s step "
+                "(use the same --params, --set and --configuration on both sides)")
+
     def connect(self) -> StateMessage:
-        """``HELLO`` and the first ``STATE``; resets the actuators to its posture."""
+        """``HELLO``, the server's ``HELLO`` and its first ``STATE``; resets the actuators to
+        the state's posture.
+
+        Raises
+        ------
+        SessionMismatchError
+            The server announced another joint count or control step.
+        NoReplyError
+            No ``HELLO`` and ``STATE`` came back within the retry budget.
+        """
         self.endpoint.sequence = 0
+        self.server_joint_count = self.server_control_step = None
         state = self._exchange(
             lambda sequence: encode_hello(sequence, time.monotonic(), self.side.joint_count,
                                           self.side.control_step),
-            lambda state, sent: True)
+            lambda state, sent: self.server_joint_count is not None)
         self.side.set_pose(state.joint_angles)
         return state
 

@@ -21,6 +21,15 @@ dynamics accepts one of three command kinds (``docs/protocol.md``):
 Safe state (:meth:`DynamicsSide.engage_safe_state`): valve mode holds every valve at its
 offset voltage (closed centre, the chambers hold their air); force and torque modes apply
 zero force / torque (seal friction stays, it is physical).
+
+Command limits (:meth:`DynamicsSide.apply`, ``docs/protocol.md``): nothing outside what the
+actuators can physically deliver reaches the model. Per joint, from its packed actuator
+parameters: voltages within the valve's [min_voltage, max_voltage]; forces within
+[pe·A_cap − ps·A_rod − patm·A_section, ps·A_cap − pe·A_rod − patm·A_section] (supply
+pressure ps on one side of the piston, exhaust pe on the other, eq 4.1.11); torques
+within ± the larger of those force magnitudes times the largest moment arm of the joint's
+linkage over its range. Values outside are clamped and counted; non-finite values are
+refused.
 """
 
 from __future__ import annotations
@@ -28,10 +37,21 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from pneumaquad.layout import P_STROKE
+from pneumaquad.layout import (
+    P_CAP_AREA,
+    P_PATM,
+    P_PE,
+    P_PS,
+    P_ROD_AREA,
+    P_ROD_SECTION,
+    P_STROKE,
+    P_UMAX,
+    P_UMIN,
+)
 from pneumaquad.network.state import StateMessage, StatusFlag
 from pneumaquad.robot.builder import RobotModel
 from pneumaquad.robot.coupling import L_RETRACTED, set_seal_friction
+from pneumaquad.robot.linkage import moment_arm
 from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["COMMAND_KINDS", "DynamicsSide", "piston_readout"]
@@ -67,6 +87,18 @@ class DynamicsSide:
     ValueError
         Unknown command kind, or force mode with ``simulation.seal_friction =
         "actuator"`` (that friction law needs the actuator's internal state).
+
+    Attributes
+    ----------
+    voltage_limits, force_limits, torque_limits : numpy.ndarray
+        Shape (N, 2): lowest and highest valve voltage [V], cylinder force [N] (positive
+        extends) and joint torque [N m] each joint's actuator can deliver.
+    command_limits : numpy.ndarray
+        The limits of this side's command kind; :meth:`apply` clamps to them.
+    command_clamped : bool
+        Whether the last applied command had a value outside the limits.
+    clamped_commands, clamped_values : int
+        Commands with at least one value clamped, and values clamped [count].
     """
 
     def __init__(self, robot: RobotModel, command_kind: str) -> None:
@@ -90,6 +122,24 @@ class DynamicsSide:
         self.safe = False
         self._retracted = self.simulation.linkage[:, L_RETRACTED].copy()
         self._stroke = self.simulation.params[:, P_STROKE].copy()
+        params = self.simulation.params
+        self.voltage_limits = params[:, [P_UMIN, P_UMAX]].copy()
+        supply, exhaust, atmosphere = params[:, P_PS], params[:, P_PE], params[:, P_PATM]
+        cap, rod, section = params[:, P_CAP_AREA], params[:, P_ROD_AREA], params[:, P_ROD_SECTION]
+        extending = supply * cap - exhaust * rod - atmosphere * section
+        retracting = exhaust * cap - supply * rod - atmosphere * section
+        self.force_limits = np.column_stack([retracting, extending])
+        lowers, uppers = robot.lower_limits(), robot.upper_limits()
+        largest_arm = np.array([
+            np.max(np.abs(moment_arm(robot.linkages[kind], np.linspace(low, high, 181))))
+            for kind, low, high in zip(robot.joint_types, lowers, uppers, strict=True)])
+        largest_torque = np.maximum(np.abs(extending), np.abs(retracting)) * largest_arm
+        self.torque_limits = np.column_stack([-largest_torque, largest_torque])
+        self.command_limits = {"valve": self.voltage_limits, "force": self.force_limits,
+                               "torque": self.torque_limits}[command_kind]
+        self.command_clamped = False
+        self.clamped_commands = 0
+        self.clamped_values = 0
         if command_kind == "torque":
             self.model.tendon_frictionloss[robot.tendon_id] = 0.0
             self.model.tendon_damping[robot.tendon_id] = 0.0
@@ -104,12 +154,30 @@ class DynamicsSide:
     def apply(self, values: np.ndarray) -> None:
         """Hold ``values`` (one per joint: [V], [N] or [N m]) from the next step on.
 
-        Leaves the safe state.
+        Values outside :attr:`command_limits` are clamped to them; such a command is
+        counted (:attr:`clamped_commands`, :attr:`clamped_values`) and flagged
+        (:attr:`command_clamped`). Leaves the safe state.
+
+        Raises
+        ------
+        ValueError
+            Wrong number of values, or a NaN / infinite value (the held command is kept).
         """
         values = np.asarray(values, dtype=np.float64).reshape(-1)
         if values.size != self.joint_count:
             raise ValueError(f"{values.size} command values for {self.joint_count} joints")
-        self.command[:] = values
+        finite = np.isfinite(values)
+        if not finite.all():
+            joints = [self.robot.joint_names[i] for i in np.flatnonzero(~finite)]
+            raise ValueError(f"non-finite {self.command_kind} command for {', '.join(joints)}; "
+                             "the command is refused")
+        limited = np.clip(values, self.command_limits[:, 0], self.command_limits[:, 1])
+        clamped = np.count_nonzero(limited != values)
+        self.command_clamped = clamped > 0
+        if clamped:
+            self.clamped_commands += 1
+            self.clamped_values += int(clamped)
+        self.command[:] = limited
         self.safe = False
         if self.command_kind == "valve":
             self.simulation.command_voltages(self.command)

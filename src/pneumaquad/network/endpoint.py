@@ -2,9 +2,12 @@
 
 Every received datagram goes through :func:`~pneumaquad.network.timing.accept_datagram`
 (malformed, duplicate and reordered datagrams are dropped, counted and logged); nothing a
-peer sends can make :meth:`UdpEndpoint.receive` raise. The socket binds to 127.0.0.1
-unless another address is given explicitly; with a ``peer`` filter, datagrams from any
-other address are dropped and counted (``foreign``) before they are even decoded.
+peer sends can make :meth:`UdpEndpoint.receive` raise. A ``HELLO`` whose parameters are
+invalid, or differ from the endpoint's own ``hello_dimensions``, is refused the same way
+(reason ``bad_count``) and its sender remembered in :attr:`UdpEndpoint.refused_hellos`.
+The socket binds to 127.0.0.1 unless another address is given explicitly; with a ``peer``
+filter, datagrams from any other address are dropped and counted (``foreign``) before
+they are even decoded.
 """
 
 from __future__ import annotations
@@ -12,8 +15,10 @@ from __future__ import annotations
 import select
 import socket
 import time
+from collections import deque
 
 from pneumaquad.network.packet_log import PacketLog
+from pneumaquad.network.protocol import check_hello
 from pneumaquad.network.sequence import SEQUENCE_MODULUS, SequenceTracker
 from pneumaquad.network.timing import accept_datagram, malformed_counts
 from pneumaquad.network.wire import (
@@ -33,6 +38,7 @@ Address = tuple[str, int]
 _RECEIVE_BUFFER = 2048  # [B], larger than MAX_DATAGRAM: oversized datagrams are seen whole
 _MAX_PEERS = 64  # trackers kept; the oldest is forgotten beyond this
 _MAX_BATCH = 256  # datagrams drained per receive call
+_MAX_REFUSED = 64  # refused HELLOs remembered until the owner answers them
 
 
 def parse_address(text: str, default_host: str = DEFAULT_HOST) -> Address:
@@ -66,11 +72,17 @@ class UdpEndpoint:
         N, for the payload-count checks of commands and ``STATE``.
     log_capacity
         Initial rows of the packet log (it grows as needed).
+    busy_wait
+        See :attr:`busy_wait` [s].
+    hello_dimensions
+        ``(joint count, control step [s])`` a received ``HELLO`` must announce (a server
+        that cannot change either); ``None`` accepts any valid ``HELLO``.
     """
 
     def __init__(self, bind: Address = (DEFAULT_HOST, 0), peer: Address | None = None,
                  joint_count: int | None = None, log_capacity: int = 16384,
-                 busy_wait: float = 0.0) -> None:
+                 busy_wait: float = 0.0,
+                 hello_dimensions: tuple[int, float] | None = None) -> None:
         self.socket = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
             self.socket.bind(bind)
@@ -86,6 +98,9 @@ class UdpEndpoint:
         self.foreign = 0  # datagrams dropped by the peer filter [count]
         self.socket_errors = 0  # send / receive errors (e.g. ICMP port unreachable) [count]
         self.hellos: list[Address] = []  # peers whose valid HELLO reset their tracker
+        self.hello_dimensions = hello_dimensions
+        #: Senders of refused HELLOs and why, oldest first, until the owner takes them.
+        self.refused_hellos: deque[tuple[Address, str]] = deque(maxlen=_MAX_REFUSED)
         #: Poll without sleeping for up to this long [s] before blocking in select: a reply
         #: that comes within it is picked up without a sleep/wake-up of the process (lower
         #: and steadier latency, at the cost of a busy core while waiting).
@@ -149,7 +164,9 @@ class UdpEndpoint:
 
         Drains what is queued (at most a few hundred datagrams per call). A valid
         ``HELLO`` resets its sender's tracker before it is classified, so a restarted
-        peer whose numbers start again at 0 is accepted.
+        peer whose numbers start again at 0 is accepted. A ``HELLO`` with invalid
+        parameters, or other than :attr:`hello_dimensions`, is dropped and logged as
+        malformed (``bad_count``), and its sender appended to :attr:`refused_hellos`.
         """
         if timeout > 0.0 and not self.wait(timeout):
             return []
@@ -168,7 +185,14 @@ class UdpEndpoint:
                 continue
             now = time.monotonic()
             tracker = self.tracker(address)
-            if self._is_hello(data):
+            hello = self._hello(data)
+            if hello is not None:
+                try:
+                    check_hello(hello, *(self.hello_dimensions or (None, None)))
+                except ProtocolError as error:
+                    self.log.record_malformed(error.reason, len(data), now)
+                    self.refused_hellos.append((address, error.detail))
+                    continue
                 tracker.reset()
                 self.hellos.append(address)
             message = accept_datagram(data, now, self.log, tracker, self.joint_count)
@@ -176,17 +200,17 @@ class UdpEndpoint:
                 accepted.append((message, address))
         return accepted
 
-    def _is_hello(self, data: bytes) -> bool:
+    def _hello(self, data: bytes) -> Message | None:
+        """The datagram decoded when it is a well-formed ``HELLO``, else ``None``."""
         if len(data) < HEADER.size or data[:4] != MAGIC:
-            return False
+            return None
         _, version, kind, *_ = HEADER.unpack_from(data)
         if version != VERSION or kind != MessageType.HELLO:
-            return False
+            return None
         try:
-            decode(data, self.joint_count)
+            return decode(data, self.joint_count)
         except ProtocolError:
-            return False
-        return True
+            return None
 
     def counters(self) -> dict[str, int]:
         """Dropped and received datagrams: malformed by reason, duplicates, reordered, ..."""

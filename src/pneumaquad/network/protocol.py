@@ -15,6 +15,7 @@ sender's monotonic clock (``time.monotonic()``) [s].
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -54,11 +55,11 @@ from pneumaquad.network.wire import (
 
 __all__ = [
     "COMMAND_TYPES", "HEADER", "HEADER_FORMAT", "HEADER_SIZE", "MAGIC", "MAX_DATAGRAM",
-    "MAX_VALUES", "REASONS", "SEQUENCE_MODULUS", "VERSION", "Message", "MessageType",
-    "ProtocolError", "SequenceTracker", "SequenceVerdict", "StateMessage", "StatusFlag",
-    "Verdict", "decode", "decode_state", "encode", "encode_bye", "encode_command",
-    "encode_hello", "encode_ping", "encode_pong", "encode_state", "expected_count",
-    "hello_parameters", "next_sequence", "pong_times", "serial_difference",
+    "MAX_VALUES", "REASONS", "SEQUENCE_MODULUS", "STEP_TOLERANCE", "VERSION", "Message",
+    "MessageType", "ProtocolError", "SequenceTracker", "SequenceVerdict", "StateMessage",
+    "StatusFlag", "Verdict", "check_hello", "decode", "decode_state", "encode", "encode_bye",
+    "encode_command", "encode_hello", "encode_ping", "encode_pong", "encode_state",
+    "expected_count", "hello_parameters", "next_sequence", "pong_times", "serial_difference",
     "state_from_values", "state_layout", "state_value_count", "state_values",
 ]
 
@@ -152,9 +153,14 @@ def encode_hello(sequence: int, monotonic_time: float, joint_count: int,
     bytes
         The datagram.
     """
-    if joint_count < 1 or not control_step > 0:
-        raise ValueError("HELLO needs joint_count >= 1 and control_step > 0")
+    if not 1 <= joint_count <= MAX_VALUES or not 0.0 < control_step < math.inf:
+        raise ValueError(f"HELLO needs a joint count in 1 .. {MAX_VALUES} and a positive, "
+                         f"finite control step; got {joint_count}, {control_step} s")
     return encode(MessageType.HELLO, sequence, monotonic_time, (joint_count, control_step))
+
+
+#: Relative tolerance of the control-step comparison of :func:`check_hello`.
+STEP_TOLERANCE = 1e-9
 
 
 def hello_parameters(hello: Message) -> tuple[int, float]:
@@ -163,15 +169,54 @@ def hello_parameters(hello: Message) -> tuple[int, float]:
     Raises
     ------
     ProtocolError
-        ``"bad_count"`` when the joint count is not a positive integer or the control
-        step is not positive.
+        ``"bad_count"`` when the joint count is not an integer in 1 .. 172
+        (:data:`MAX_VALUES`) or the control step is not positive and finite.
     """
     if hello.type != MessageType.HELLO:
         raise ValueError(f"expected a HELLO, got {hello.type.name}")
     joints, step = float(hello.values[0]), float(hello.values[1])
-    if joints < 1 or joints != int(joints) or joints > MAX_VALUES or not step > 0:
-        raise ProtocolError("bad_count", f"HELLO with joint count {joints}, step {step} s")
+    if not (1 <= joints <= MAX_VALUES and joints == int(joints)):
+        raise ProtocolError("bad_count", f"HELLO joint count {joints:g} is not an integer "
+                            f"in 1 .. {MAX_VALUES}")
+    if not (0.0 < step < math.inf):
+        raise ProtocolError("bad_count", f"HELLO control step {step:g} s is not positive")
     return int(joints), step
+
+
+def check_hello(hello: Message, joint_count: int | None = None,
+                control_step: float | None = None) -> tuple[int, float]:
+    """Read a ``HELLO`` and check it against the receiver's own dimensions.
+
+    Parameters
+    ----------
+    hello
+        The message.
+    joint_count
+        The receiver's joint count N; ``None``: any valid count.
+    control_step
+        The receiver's control step [s]; ``None``: any valid step. Steps equal within a
+        relative :data:`STEP_TOLERANCE` (1e-9) match.
+
+    Returns
+    -------
+    tuple
+        ``(joint count [-], control step [s])`` announced by the sender.
+
+    Raises
+    ------
+    ProtocolError
+        ``"bad_count"``: invalid parameters (:func:`hello_parameters`), or a joint count
+        or control step other than the receiver's.
+    """
+    joints, step = hello_parameters(hello)
+    if joint_count is not None and joints != joint_count:
+        raise ProtocolError("bad_count", f"HELLO announces {joints} joints; this receiver "
+                            f"has {joint_count}")
+    if control_step is not None and not math.isclose(step, control_step,
+                                                     rel_tol=STEP_TOLERANCE, abs_tol=0.0):
+        raise ProtocolError("bad_count", f"HELLO announces a {step:g} s control step; this "
+                            f"receiver steps {control_step:g} s")
+    return joints, step
 
 
 def encode_bye(sequence: int, monotonic_time: float) -> bytes:

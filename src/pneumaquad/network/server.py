@@ -17,9 +17,15 @@ Two modes (Daepp 2011, ch. 5.1: SrLib's loop was Receive - Compute - Send):
     [-]`` recording column) and the peer's sequence tracking is reset; the next
     command releases it and the next ``STATE`` carries ``RESYNCHRONISED``.
 
-Both answer ``PING`` with ``PONG``, answer a ``HELLO`` with the current ``STATE``
-(flagged ``RESYNCHRONISED``) without stepping, and stop on ``BYE``, on :meth:`stop`, on
-``stop_request.requested`` (Ctrl-C) or after ``duration`` s of wall time. With a run
+Both answer ``PING`` with ``PONG``, answer a ``HELLO`` with their own ``HELLO`` (joint
+count and control step) and the current ``STATE`` (flagged ``RESYNCHRONISED``) without
+stepping, and stop on ``BYE``, on :meth:`stop`, on ``stop_request.requested`` (Ctrl-C)
+or after ``duration`` s of wall time. A ``HELLO`` whose joint count or control step is
+invalid or not the server's is refused (counted as malformed ``bad_count`` and as a
+refused HELLO) and answered with the server's ``HELLO`` only, so the peer can tell what
+to use. Commands are limited to what the actuators can deliver
+(:meth:`DynamicsSide.apply`); a ``STATE`` that follows a clamped command carries
+``CLAMPED``. With a run
 folder, the robot recording, ``packets.parquet``, ``timing.json``, ``rtt.png`` and
 ``timeline.png`` are written, also when the run is interrupted.
 """
@@ -34,7 +40,7 @@ import numpy as np
 
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.endpoint import DEFAULT_HOST, Address, UdpEndpoint
-from pneumaquad.network.protocol import encode_pong, encode_state
+from pneumaquad.network.protocol import encode_hello, encode_pong, encode_state
 from pneumaquad.network.run_output import (
     NetworkRecording,
     write_network_files,
@@ -99,7 +105,8 @@ class DynamicsServer:
         self.folder = None if folder is None else Path(folder)
         self.record_every = record_every
         self.plots = plots
-        self.endpoint = UdpEndpoint(bind, peer, side.joint_count, busy_wait=busy_wait)
+        self.endpoint = UdpEndpoint(bind, peer, side.joint_count, busy_wait=busy_wait,
+                                    hello_dimensions=(side.joint_count, side.control_step))
         self.command_type = _COMMAND_TYPE[side.command_kind]
         self.client: Address | None = None
         self.answered = -1
@@ -107,6 +114,7 @@ class DynamicsServer:
         self.retransmissions = 0  # lockstep commands answered without stepping [count]
         self.wrong_commands = 0  # commands of another kind than served [count]
         self.timeouts = 0  # realtime safe-state engagements [count]
+        self.refused_hellos = 0  # HELLOs with other dimensions than the server's [count]
         self.wakeups: list[float] = []
         self._pending = StatusFlag.NONE  # one-shot flags for the next STATE
         self._timed_out = False
@@ -132,7 +140,14 @@ class DynamicsServer:
             flags |= StatusFlag.COMMAND_TIMED_OUT
         if self.side.safe:
             flags |= StatusFlag.SAFE_STATE
+        elif self.side.command_clamped:
+            flags |= StatusFlag.CLAMPED
         return flags
+
+    def _send_hello(self, address: Address) -> None:
+        self.endpoint.send(encode_hello(self.endpoint.take_sequence(), time.monotonic(),
+                                        self.side.joint_count, self.side.control_step),
+                           address)
 
     def _send_state(self, address: Address) -> None:
         state = self.side.state(self.answered, self.status() | self._pending)
@@ -160,6 +175,7 @@ class DynamicsServer:
         elif kind == MessageType.HELLO:
             self.client = address
             self._pending |= StatusFlag.RESYNCHRONISED
+            self._send_hello(address)
             self._send_state(address)
         elif kind == MessageType.BYE:
             self._stopping = True
@@ -189,6 +205,11 @@ class DynamicsServer:
     def _drain(self, timeout: float) -> None:
         for message, address in self.endpoint.receive(timeout):
             self._handle(message, address)
+        refused = self.endpoint.refused_hellos
+        while refused:
+            address, _reason = refused.popleft()
+            self.refused_hellos += 1
+            self._send_hello(address)
 
     # --- loops ---------------------------------------------------------------------------
     def run(self, stop_request: StopFlag | None = None) -> dict[str, Any]:
@@ -260,6 +281,8 @@ class DynamicsServer:
             "wall time [s]": wall_time, "retransmissions [count]": self.retransmissions,
             "wrong command kind [count]": self.wrong_commands,
             "timeouts [count]": self.timeouts,
+            "refused hellos [count]": self.refused_hellos,
+            "clamped commands [count]": self.side.clamped_commands,
         } | self.endpoint.counters()
         if self.wakeups:
             self.summary |= jitter_statistics(np.array(self.wakeups), self.side.control_step)

@@ -41,6 +41,7 @@ class StatusFlag(IntFlag):
     SAFE_STATE = 1  # bit 0: safe state engaged (valves centred / torques zeroed)
     COMMAND_TIMED_OUT = 2  # bit 1: no valid command within the timeout
     RESYNCHRONISED = 4  # bit 2: sequence tracking was reset (HELLO or long silence)
+    CLAMPED = 8  # bit 3: the held command was clamped to what the actuators can deliver
 
 
 def state_value_count(joint_count: int) -> int:

@@ -88,6 +88,18 @@ def _read(path: Path) -> dict[str, Any]:
         raise ParameterError(
             [Problem("<file>", str(path), f"is not valid TOML: {exc}")], source=str(path)
         ) from None
+    except UnicodeDecodeError as exc:
+        raise ParameterError(
+            [
+                Problem(
+                    "<file>",
+                    str(path),
+                    f"is not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
+                    f"{exc.start}); expected a TOML file encoded in UTF-8",
+                )
+            ],
+            source=str(path),
+        ) from None
 
 
 def _parse_override_value(text: str) -> Any:

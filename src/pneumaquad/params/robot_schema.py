@@ -13,19 +13,27 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
-from annotated_types import Ge, Gt, Le
 from pydantic import StrictInt
 from pydantic import model_validator as _model_validator
 
 from .schema import (
+    MAX_LENGTH,
+    MAX_MASS,
+    MAX_TIME_CONSTANT,
+    Bounds,
     ControllerParameters,
+    ControlStep,
     CrossFieldError,
     Damping,
     Length,
     Mass,
     Meta,
+    NonNegativeLength,
+    NonNegativeMass,
     Number,
+    PositiveLength,
     QuantityField,
+    StepCount,
     Time,
     _Model,
 )
@@ -52,9 +60,41 @@ JOINT_NAMES = ("alpha", "beta", "gamma")
 #: Leg names; SrLib's L1, R1, L2, R2 (App. C.2.2).
 LEG_NAMES = ("front_left", "front_right", "rear_left", "rear_right")
 
-Angle = Annotated[float, QuantityField("angle")]
-Density = Annotated[float, QuantityField("density"), Gt(0)]
-Inertia = Annotated[float, QuantityField("inertia"), Gt(0)]
+#: Largest extent of an obstacle or its distance from the origin [m].
+MAX_ENVIRONMENT_LENGTH = 100.0
+
+#: Angle of a frame rotation in [-360 deg, 360 deg].
+Angle = Annotated[
+    float,
+    QuantityField("angle"),
+    Bounds(-2 * math.pi, 2 * math.pi, "rad", lower_inclusive=True,
+           lower_text="-2π rad (-360°)", upper_text="2π rad (360°)"),
+]
+#: Joint limit in [-180 deg, 180 deg].
+JointAngle = Annotated[
+    float,
+    QuantityField("angle"),
+    Bounds(-math.pi, math.pi, "rad", lower_inclusive=True,
+           lower_text="-π rad (-180°)", upper_text="π rad (180°)"),
+]
+#: Position coordinate in [-10 m, 10 m].
+Coordinate = Annotated[Length, Bounds(-MAX_LENGTH, MAX_LENGTH, "m", lower_inclusive=True)]
+#: Obstacle position coordinate in [-100 m, 100 m].
+EnvironmentCoordinate = Annotated[
+    Length, Bounds(-MAX_ENVIRONMENT_LENGTH, MAX_ENVIRONMENT_LENGTH, "m", lower_inclusive=True)
+]
+#: Obstacle extent in (0, 100 m].
+EnvironmentLength = Annotated[Length, Bounds(0.0, MAX_ENVIRONMENT_LENGTH, "m")]
+#: Density in (0, 30000 kg/m^3] (osmium, the densest element, is 22600).
+Density = Annotated[float, QuantityField("density"), Bounds(0.0, 30000.0, "kg/m^3")]
+#: Principal moment of inertia in (0, 1000 kg m^2].
+Inertia = Annotated[float, QuantityField("inertia"), Bounds(0.0, 1000.0, "kg*m^2")]
+#: Colour component in [0, 1].
+ColourComponent = Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True)]
+#: Gain multiplier in [0, 100].
+GainScale = Annotated[Number, Bounds(0.0, 100.0, lower_inclusive=True)]
+#: Friction coefficient in [0, 10].
+FrictionCoefficient = Annotated[Number, Bounds(0.0, 10.0, lower_inclusive=True)]
 
 
 class Frame(_Model):
@@ -64,7 +104,7 @@ class Frame(_Model):
     """
 
     rotation_zyx: tuple[Angle, Angle, Angle]
-    position: tuple[Length, Length, Length]
+    position: tuple[Coordinate, Coordinate, Coordinate]
 
 
 class LinkParameters(_Model):
@@ -75,13 +115,13 @@ class LinkParameters(_Model):
     link frame axes [kg m^2]) override the density estimate (thesis 5.6.1, 6.6.2).
     """
 
-    diameter: Annotated[Length, Gt(0)]
-    length: Annotated[Length, Ge(0)]
+    diameter: PositiveLength
+    length: NonNegativeLength
     density: Density
-    collision_length: Annotated[Length, Ge(0)] | None = None
-    mass: Annotated[Mass, Gt(0)] | None = None
+    collision_length: NonNegativeLength | None = None
+    mass: Annotated[Mass, Bounds(0.0, MAX_MASS, "kg")] | None = None
     inertia: tuple[Inertia, Inertia, Inertia] | None = None
-    color: tuple[Number, Number, Number] = (0.7, 0.7, 0.7)
+    color: tuple[ColourComponent, ColourComponent, ColourComponent] = (0.7, 0.7, 0.7)
 
 
 class JointParameters(_Model):
@@ -89,8 +129,8 @@ class JointParameters(_Model):
 
     parent_frame: Frame | None = None
     child_frame: Frame
-    lower_limit: Angle
-    upper_limit: Angle
+    lower_limit: JointAngle
+    upper_limit: JointAngle
     damping: Damping = 0.0
 
     @_model_validator(mode="after")
@@ -123,13 +163,13 @@ class LinkageParameters(_Model):
     range exactly with γ centred on 90° (:func:`pneumaquad.robot.linkage.design_linkage`).
     """
 
-    parent_pivot_radius: Annotated[Length, Gt(0)]
-    child_pivot_radius: Annotated[Length, Gt(0)] | None = None
+    parent_pivot_radius: PositiveLength
+    child_pivot_radius: PositiveLength | None = None
     included_angle_at_zero: Angle | None = None
-    retracted_length: Annotated[Length, Gt(0)] | None = None
+    retracted_length: PositiveLength | None = None
     direction: Literal[1, -1]
-    axial_offset: Length = 0.0
-    moving_mass: Annotated[Mass, Ge(0)]
+    axial_offset: Coordinate = 0.0
+    moving_mass: NonNegativeMass
 
     @_model_validator(mode="after")
     def _all_or_none(self) -> LinkageParameters:
@@ -170,9 +210,11 @@ class JointControllerParameters(ControllerParameters):
     the pressure sensors without a steady-state error.
     """
 
-    gain_scale: Annotated[Number, Ge(0)] = 1.0
-    force_feedback_gain: Annotated[float, QuantityField("voltage_per_force"), Ge(0)] = 0.0
-    force_feedback_time_constant: Annotated[Time, Gt(0)] = 0.05
+    gain_scale: GainScale = 1.0
+    force_feedback_gain: Annotated[
+        float, QuantityField("voltage_per_force"), Bounds(0.0, 1.0, "V/N", lower_inclusive=True)
+    ] = 0.0
+    force_feedback_time_constant: Annotated[Time, Bounds(0.0, MAX_TIME_CONSTANT, "s")] = 0.05
 
 
 class RobotControllerParameters(_Model):
@@ -181,36 +223,41 @@ class RobotControllerParameters(_Model):
     alpha: JointControllerParameters
     beta: JointControllerParameters
     gamma: JointControllerParameters
-    stance_gain_scale: Annotated[Number, Ge(0)] = 1.0
-    swing_gain_scale: Annotated[Number, Ge(0)] = 1.0
+    stance_gain_scale: GainScale = 1.0
+    swing_gain_scale: GainScale = 1.0
 
 
 class ContactParameters(_Model):
     """Friction coefficients (SrLib ``SetFriction``, App. C.2) and MuJoCo contact softness."""
 
-    ground_friction: Annotated[Number, Ge(0)]
-    foot_friction: Annotated[Number, Ge(0)]
-    body_friction: Annotated[Number, Ge(0)] = 1.0
-    time_constant: Annotated[Time, Gt(0)] = 0.005
-    damping_ratio: Annotated[Number, Gt(0)] = 1.0
+    ground_friction: FrictionCoefficient
+    foot_friction: FrictionCoefficient
+    body_friction: FrictionCoefficient = 1.0
+    time_constant: Annotated[Time, Bounds(0.0, 1.0, "s")] = 0.005
+    damping_ratio: Annotated[Number, Bounds(0.0, 100.0)] = 1.0
     #: MuJoCo ``impratio``: impedance of the friction rows relative to the normal ones
     #: (elliptic cones); above 1 a loaded contact creeps less under tangential force.
-    friction_impedance_ratio: Annotated[Number, Ge(1)] = 1.0
+    friction_impedance_ratio: Annotated[Number, Bounds(1.0, 1000.0, lower_inclusive=True)] = 1.0
 
 
 class EnvironmentParameters(_Model):
     """Obstacles: block, ramp (App. C.2.3: 1.2 × 1.2 × 0.019 m), rough-terrain field."""
 
-    block_size: tuple[Length, Length, Length]
-    block_position: tuple[Length, Length, Length]
-    ramp_size: tuple[Length, Length, Length]
-    ramp_position: tuple[Length, Length, Length]
-    ramp_slope: Angle
-    rough_size: tuple[Length, Length]
-    rough_position: tuple[Length, Length]
-    rough_max_height: Annotated[Length, Gt(0)]
-    rough_cell: Annotated[Length, Gt(0)]
-    rough_fill: Annotated[Number, Ge(0), Le(1)] = 0.5
+    block_size: tuple[EnvironmentLength, EnvironmentLength, EnvironmentLength]
+    block_position: tuple[EnvironmentCoordinate, EnvironmentCoordinate, EnvironmentCoordinate]
+    ramp_size: tuple[EnvironmentLength, EnvironmentLength, EnvironmentLength]
+    ramp_position: tuple[EnvironmentCoordinate, EnvironmentCoordinate, EnvironmentCoordinate]
+    ramp_slope: Annotated[
+        float,
+        QuantityField("angle"),
+        Bounds(-math.pi / 3, math.pi / 3, "rad", lower_inclusive=True,
+               lower_text="-π/3 rad (-60°)", upper_text="π/3 rad (60°)"),
+    ]
+    rough_size: tuple[EnvironmentLength, EnvironmentLength]
+    rough_position: tuple[EnvironmentCoordinate, EnvironmentCoordinate]
+    rough_max_height: PositiveLength
+    rough_cell: PositiveLength
+    rough_fill: Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True)] = 0.5
 
 
 class TestbedParameters(_Model):
@@ -220,11 +267,11 @@ class TestbedParameters(_Model):
     ``axle_drop`` below the thorax axis.
     """
 
-    wheel_radius: Annotated[Length, Gt(0)]
-    wheel_width: Annotated[Length, Gt(0)]
-    wheel_mass: Annotated[Mass, Gt(0)]
-    axle_drop: Annotated[Length, Ge(0)]
-    track_width: Annotated[Length, Gt(0)]
+    wheel_radius: PositiveLength
+    wheel_width: PositiveLength
+    wheel_mass: Annotated[Mass, Bounds(0.0, MAX_MASS, "kg")]
+    axle_drop: NonNegativeLength
+    track_width: PositiveLength
 
 
 class RobotSimulationParameters(_Model):
@@ -237,14 +284,14 @@ class RobotSimulationParameters(_Model):
     ``"actuator"`` (the actuator file's force law, applied through the motor).
     """
 
-    control_step: Annotated[Time, Gt(0)]
-    substeps: Annotated[StrictInt, Ge(1)]
-    physics_steps: Annotated[StrictInt, Ge(1)] = 1
+    control_step: ControlStep
+    substeps: StepCount
+    physics_steps: StepCount = 1
     integrator: Literal["implicitfast", "implicit", "euler", "rk4"] = "implicitfast"
     seal_friction: Literal["mujoco", "actuator"] = "mujoco"
-    noslip_iterations: Annotated[StrictInt, Ge(0)] = 0
-    solver_iterations: Annotated[StrictInt, Ge(1)] = 50
-    recording_every: Annotated[StrictInt, Ge(1)] = 10
+    noslip_iterations: Annotated[StrictInt, Bounds(0, 1000, lower_inclusive=True)] = 0
+    solver_iterations: Annotated[StrictInt, Bounds(1, 10000, lower_inclusive=True)] = 50
+    recording_every: Annotated[StrictInt, Bounds(1, 1_000_000, lower_inclusive=True)] = 10
 
 
 class RobotParameters(_Model):

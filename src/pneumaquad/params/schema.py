@@ -12,7 +12,6 @@ import math
 from functools import cached_property
 from typing import Annotated, Any, Literal
 
-from annotated_types import Ge, Gt, Le, Lt
 from pydantic import BaseModel, ConfigDict, StrictBool, StrictInt, field_validator
 from pydantic import model_validator as _model_validator
 from pydantic_core import core_schema
@@ -85,6 +84,125 @@ class _NumberField:
         return core_schema.no_info_before_validator_function(_number, handler(source))
 
 
+def _format_bound(value: float, unit: str) -> str:
+    text = f"{value:.6g}"
+    return f"{text} {unit}" if unit else text
+
+
+class Bounds:
+    """Annotation marker: a finite value within a physically meaningful range.
+
+    The range is part of the field's JSON-schema description and of the error message,
+    which reads after the value, e.g. ``'1e300 in' should be greater than 0 m and at most
+    10 m``.
+
+    Parameters
+    ----------
+    lower, upper : float or None
+        Range ends in SI units (``None``: unbounded on that side).
+    unit : str
+        SI unit shown with the ends (``"m"``, ``"Pa"``); empty for plain numbers.
+    lower_inclusive, upper_inclusive : bool
+        Whether the ends themselves are allowed; by default the range is ``(lower,
+        upper]``.
+    lower_text, upper_text : str, optional
+        How to show an end when its number is awkward (``"5/3"``, ``"100 MPa"``).
+    """
+
+    def __init__(
+        self,
+        lower: float | None,
+        upper: float | None,
+        unit: str = "",
+        *,
+        lower_inclusive: bool = False,
+        upper_inclusive: bool = True,
+        lower_text: str | None = None,
+        upper_text: str | None = None,
+    ) -> None:
+        self.lower, self.upper, self.unit = lower, upper, unit
+        self.lower_inclusive, self.upper_inclusive = lower_inclusive, upper_inclusive
+        self.lower_text = lower_text or (
+            None if lower is None else _format_bound(lower, unit)
+        )
+        self.upper_text = upper_text or (
+            None if upper is None else _format_bound(upper, unit)
+        )
+
+    @property
+    def expectation(self) -> str:
+        """The range in words: ``"greater than 0 m and at most 10 m"``."""
+        parts = []
+        if self.lower_text is not None:
+            lower_word = "at least" if self.lower_inclusive else "greater than"
+            parts.append(f"{lower_word} {self.lower_text}")
+        if self.upper_text is not None:
+            upper_word = "at most" if self.upper_inclusive else "less than"
+            parts.append(f"{upper_word} {self.upper_text}")
+        return " and ".join(parts) if parts else "finite"
+
+    def contains(self, value: float) -> bool:
+        """Whether ``value`` is finite and within the range."""
+        if not math.isfinite(value):
+            return False
+        if self.lower is not None and (
+            value < self.lower or (value == self.lower and not self.lower_inclusive)
+        ):
+            return False
+        return self.upper is None or not (
+            value > self.upper or (value == self.upper and not self.upper_inclusive)
+        )
+
+    def _validate(self, value: Any) -> Any:
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if number and not self.contains(float(value)):
+            raise QuantityError(f"should be {self.expectation}")
+        return value
+
+    def __get_pydantic_core_schema__(self, source: Any, handler: Any) -> Any:
+        return core_schema.no_info_after_validator_function(self._validate, handler(source))
+
+    def __get_pydantic_json_schema__(self, schema: Any, handler: Any) -> Any:
+        json_schema = handler(schema)
+        json_schema["description"] = f"finite, {self.expectation}"
+        return json_schema
+
+
+# --- physically meaningful ranges (SI), shared by the actuator and robot schemas -------
+#: Largest length of any part or placement [m].
+MAX_LENGTH = 10.0
+#: Largest absolute pressure [Pa] (100 MPa, far above any pneumatic component).
+MAX_PRESSURE = 100e6
+#: Highest temperature [K] (air at 2000 K is far outside any pneumatic use).
+MAX_TEMPERATURE = 2000.0
+#: Largest mass of a load, a link or a piston [kg].
+MAX_MASS = 1000.0
+#: Largest magnitude of a valve or controller voltage [V].
+MAX_VOLTAGE = 100.0
+#: Largest force of friction or of an end stop model [N].
+MAX_FORCE = 1e5
+#: Largest damping coefficient [N s/m].
+MAX_DAMPING = 1e7
+#: Largest stiffness [N/m].
+MAX_STIFFNESS = 1e10
+#: Largest time constant or other parameter time [s].
+MAX_TIME_CONSTANT = 10.0
+#: Largest gravity magnitude [m/s^2] (about ten times the Earth's).
+MAX_GRAVITY = 100.0
+
+
+def _positive(upper: float, unit: str = "", **kwargs: Any) -> Bounds:
+    return Bounds(0.0, upper, unit, **kwargs)
+
+
+def _non_negative(upper: float, unit: str = "", **kwargs: Any) -> Bounds:
+    return Bounds(0.0, upper, unit, lower_inclusive=True, **kwargs)
+
+
+def _symmetric(limit: float, unit: str = "", **kwargs: Any) -> Bounds:
+    return Bounds(-limit, limit, unit, lower_inclusive=True, **kwargs)
+
+
 Number = Annotated[float, _NumberField()]
 Pressure = Annotated[float, QuantityField("pressure")]
 Length = Annotated[float, QuantityField("length")]
@@ -93,17 +211,52 @@ Volume = Annotated[float, QuantityField("volume")]
 Mass = Annotated[float, QuantityField("mass")]
 Force = Annotated[float, QuantityField("force")]
 Time = Annotated[float, QuantityField("time")]
-Temperature = Annotated[float, QuantityField("temperature"), Gt(0)]
 Voltage = Annotated[float, QuantityField("voltage")]
-SpecificHeat = Annotated[float, QuantityField("specific_heat"), Gt(0)]
 Conductance = Annotated[float, QuantityField("conductance")]
-Damping = Annotated[float, QuantityField("damping"), Ge(0)]
-Stiffness = Annotated[float, QuantityField("stiffness"), Gt(0)]
 Velocity = Annotated[float, QuantityField("velocity")]
 InverseVelocity = Annotated[float, QuantityField("inverse_velocity")]
 Acceleration = Annotated[float, QuantityField("acceleration")]
-HeatTransfer = Annotated[float, QuantityField("heat_transfer"), Ge(0)]
-Polynomial = tuple[Number, Number, Number, Number, Number]
+
+#: Absolute pressure in (0, 100 MPa].
+AbsolutePressure = Annotated[Pressure, _positive(MAX_PRESSURE, "Pa", upper_text="100 MPa")]
+#: Length in (0, 10 m].
+PositiveLength = Annotated[Length, _positive(MAX_LENGTH, "m")]
+#: Length in [0, 10 m].
+NonNegativeLength = Annotated[Length, _non_negative(MAX_LENGTH, "m")]
+#: Mass in [0, 1000 kg].
+NonNegativeMass = Annotated[Mass, _non_negative(MAX_MASS, "kg")]
+#: Thermodynamic temperature in (0 K, 2000 K).
+Temperature = Annotated[
+    float,
+    QuantityField("temperature"),
+    Bounds(0.0, MAX_TEMPERATURE, "K", upper_inclusive=False),
+]
+#: Gas constant or specific heat in (0, 20000 J/(kg K)] (hydrogen's cp is 14300).
+SpecificHeat = Annotated[
+    float, QuantityField("specific_heat"), _positive(20000.0, "J/(kg*K)")
+]
+#: Valve or controller voltage in [-100 V, 100 V].
+BoundedVoltage = Annotated[Voltage, _symmetric(MAX_VOLTAGE, "V")]
+#: Damping coefficient in [0, 1e7 N s/m].
+Damping = Annotated[float, QuantityField("damping"), _non_negative(MAX_DAMPING, "N*s/m")]
+#: Stiffness in (0, 1e10 N/m].
+Stiffness = Annotated[float, QuantityField("stiffness"), _positive(MAX_STIFFNESS, "N/m")]
+#: Heat transfer coefficient in [0, 1e5 W/(m^2 K)].
+HeatTransfer = Annotated[
+    float, QuantityField("heat_transfer"), _non_negative(1e5, "W/(m^2*K)")
+]
+#: Time constant in [0, 10 s].
+TimeConstant = Annotated[Time, _non_negative(MAX_TIME_CONSTANT, "s")]
+#: Control step in [1 us, 1 s].
+ControlStep = Annotated[Time, Bounds(1e-6, 1.0, "s", lower_inclusive=True)]
+#: Area-polynomial coefficient in [-1e-3, 1e-3] m^2/V^n.
+AreaCoefficient = Annotated[Number, _symmetric(1e-3, "m^2/V^n")]
+Polynomial = tuple[AreaCoefficient, AreaCoefficient, AreaCoefficient, AreaCoefficient,
+                   AreaCoefficient]
+#: Iteration and step counts in [1, 1000].
+StepCount = Annotated[StrictInt, Bounds(1, 1000, lower_inclusive=True)]
+#: A dimensionless ratio in (0, 1).
+OpenFraction = Annotated[Number, Bounds(0.0, 1.0, upper_inclusive=False)]
 
 
 class _Model(BaseModel):
@@ -130,22 +283,22 @@ class Meta(_Model):
 class GasParameters(_Model):
     """Air properties (thesis eq 4.1.4–4.1.11): k, R [J/(kg K)], cp, Ts [K], patm [Pa]."""
 
-    heat_capacity_ratio: Annotated[Number, Gt(1)]
+    heat_capacity_ratio: Annotated[Number, Bounds(1.0, 5.0 / 3.0, upper_text="5/3")]
     gas_constant: SpecificHeat
     specific_heat_cp: SpecificHeat
     supply_temperature: Temperature
-    atmospheric_pressure: Annotated[Pressure, Gt(0)]
-    critical_pressure_ratio: Annotated[Number, Gt(0), Lt(1)]
+    atmospheric_pressure: AbsolutePressure
+    critical_pressure_ratio: OpenFraction
 
 
 class SupplyParameters(_Model):
     """Supply [Pa absolute]; the tank fields are required only for ``model="tank"``."""
 
     model: Literal["ideal", "tank"]
-    supply_pressure: Annotated[Pressure, Gt(0)]
-    exhaust_pressure: Annotated[Pressure, Gt(0)]
-    tank_volume: Annotated[Volume, Gt(0)] | None = None
-    tank_initial_pressure: Annotated[Pressure, Gt(0)] | None = None
+    supply_pressure: AbsolutePressure
+    exhaust_pressure: AbsolutePressure
+    tank_volume: Annotated[Volume, _positive(10.0, "m^3")] | None = None
+    tank_initial_pressure: AbsolutePressure | None = None
     tank_temperature: Temperature | None = None
 
     @_model_validator(mode="after")
@@ -179,13 +332,13 @@ class SupplyParameters(_Model):
 class CylinderParameters(_Model):
     """Cylinder geometry [m, m², kg] (thesis App. B.1.1 lines 43–54)."""
 
-    bore: Annotated[Length, Gt(0)]
-    rod_diameter: Annotated[Length, Gt(0)]
-    stroke: Annotated[Length, Gt(0)]
-    cap_dead_length: Annotated[Length, Gt(0)]
-    rod_dead_length: Annotated[Length, Gt(0)]
-    slider_area: Annotated[Area, Ge(0)]
-    piston_mass: Annotated[Mass, Ge(0)]
+    bore: PositiveLength
+    rod_diameter: PositiveLength
+    stroke: PositiveLength
+    cap_dead_length: PositiveLength
+    rod_dead_length: PositiveLength
+    slider_area: Annotated[Area, _non_negative(1.0, "m^2")]
+    piston_mass: NonNegativeMass
 
     @property
     def cap_area(self) -> float:
@@ -216,14 +369,15 @@ class CylinderParameters(_Model):
 class SimpleValveParameters(_Model):
     """Linear-area valve [m², V] and its ISO 6358 form [m³/(s·Pa)]."""
 
-    max_area: Annotated[Area, Gt(0)]
-    leak_area: Annotated[Area, Ge(0)]
-    full_scale_voltage: Annotated[Voltage, Gt(0)]
-    cap_discharge_coefficient: Annotated[Number, Gt(0), Le(1)]
-    rod_discharge_coefficient: Annotated[Number, Gt(0), Le(1)]
-    sonic_conductance: Annotated[Conductance, Gt(0)]
-    leak_conductance: Annotated[Conductance, Ge(0)]
-    iso_critical_ratio: Annotated[Number, Ge(0), Lt(1)]
+    max_area: Annotated[Area, _positive(1.0, "m^2")]
+    leak_area: Annotated[Area, _non_negative(1.0, "m^2")]
+    full_scale_voltage: Annotated[Voltage, _positive(MAX_VOLTAGE, "V")]
+    cap_discharge_coefficient: Annotated[Number, _positive(1.0)]
+    rod_discharge_coefficient: Annotated[Number, _positive(1.0)]
+    sonic_conductance: Annotated[Conductance, _positive(1e-5, "m^3/(s*Pa)")]
+    leak_conductance: Annotated[Conductance, _non_negative(1e-5, "m^3/(s*Pa)")]
+    iso_critical_ratio: Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True,
+                                                 upper_inclusive=False)]
 
 
 class ValvePortParameters(_Model):
@@ -231,8 +385,8 @@ class ValvePortParameters(_Model):
 
     area_positive: Polynomial
     area_negative: Polynomial
-    high_pressure_cutoff: Voltage
-    low_pressure_cutoff: Voltage
+    high_pressure_cutoff: BoundedVoltage
+    low_pressure_cutoff: BoundedVoltage
 
     @_model_validator(mode="after")
     def _cross(self) -> ValvePortParameters:
@@ -252,11 +406,11 @@ class ValveParameters(_Model):
     flow_form: Literal["orifice", "iso6358"]
     area_curve: Literal["polynomial", "linear"] = "polynomial"
     input_pressure: Literal["tanh", "switched"] = "tanh"
-    offset_voltage: Voltage
-    min_voltage: Voltage
-    max_voltage: Voltage
-    spool_time_constant: Annotated[Time, Ge(0)]
-    laminar_pressure_ratio: Annotated[Number, Gt(0.9), Lt(1)]
+    offset_voltage: BoundedVoltage
+    min_voltage: BoundedVoltage
+    max_voltage: BoundedVoltage
+    spool_time_constant: TimeConstant
+    laminar_pressure_ratio: Annotated[Number, Bounds(0.9, 1.0, upper_inclusive=False)]
     cap_port: Literal[1, 2]
     simple: SimpleValveParameters
     port1: ValvePortParameters
@@ -295,12 +449,12 @@ class FrictionParameters(_Model):
     """Friction models (thesis 4.2.2): forces [N], N·s/m, m/s, s/m, N/m."""
 
     model: Literal["stribeck_tanh", "viscous", "coulomb", "coulomb_viscous", "lugre"]
-    static_force: Annotated[Force, Ge(0)]
-    coulomb_force: Annotated[Force, Ge(0)]
+    static_force: Annotated[Force, _non_negative(MAX_FORCE, "N")]
+    coulomb_force: Annotated[Force, _non_negative(MAX_FORCE, "N")]
     viscous_coefficient: Damping
-    stribeck_velocity: Annotated[Velocity, Gt(0)]
-    stribeck_exponent: Annotated[Number, Gt(0)]
-    tanh_coefficient: Annotated[InverseVelocity, Gt(0)]
+    stribeck_velocity: Annotated[Velocity, _positive(10.0, "m/s")]
+    stribeck_exponent: Annotated[Number, _positive(10.0)]
+    tanh_coefficient: Annotated[InverseVelocity, _positive(1e6, "s/m")]
     damping_coefficient: Damping
     bristle_stiffness: Stiffness
     bristle_damping: Damping
@@ -320,7 +474,9 @@ class ThermodynamicsParameters(_Model):
     """Chamber thermodynamics: polytropic n, h [W/(m² K)], wall temperature [K]."""
 
     model: Literal["adiabatic", "polytropic", "heat_transfer"]
-    polytropic_exponent: Annotated[Number, Ge(1)]
+    polytropic_exponent: Annotated[
+        Number, Bounds(1.0, 5.0 / 3.0, lower_inclusive=True, upper_text="5/3")
+    ]
     heat_transfer_coefficient: HeatTransfer
     wall_temperature: Temperature
 
@@ -373,15 +529,15 @@ def orientation_to_angle(orientation: str) -> float:
 class RigParameters(_Model):
     """Single-DoF test rig: load [kg], orientation, gravity, end stops, initial state."""
 
-    load_mass: Annotated[Mass, Ge(0)]
+    load_mass: NonNegativeMass
     orientation: str
-    gravity: Annotated[Acceleration, Ge(0)]
+    gravity: Annotated[Acceleration, _non_negative(MAX_GRAVITY, "m/s^2")]
     spacer: StrictBool
     end_stop_stiffness: Stiffness
     end_stop_damping: Damping
-    initial_position: Annotated[Length, Ge(0)]
-    initial_cap_pressure: Annotated[Pressure, Gt(0)]
-    initial_rod_pressure: Annotated[Pressure, Gt(0)]
+    initial_position: NonNegativeLength
+    initial_cap_pressure: AbsolutePressure
+    initial_rod_pressure: AbsolutePressure
 
     @field_validator("orientation")
     @classmethod
@@ -403,21 +559,27 @@ class RigParameters(_Model):
 class ControllerParameters(_Model):
     """PID position controller: gains [V/m, V/(m s), V s/m], filter [s], clamp [V]."""
 
-    proportional_gain: Annotated[float, QuantityField("proportional_gain")]
-    integral_gain: Annotated[float, QuantityField("integral_gain")]
-    derivative_gain: Annotated[float, QuantityField("derivative_gain")]
-    derivative_filter_time_constant: Annotated[Time, Ge(0)]
-    integral_limit: Annotated[Voltage, Ge(0)]
+    proportional_gain: Annotated[
+        float, QuantityField("proportional_gain"), _non_negative(1e5, "V/m")
+    ]
+    integral_gain: Annotated[
+        float, QuantityField("integral_gain"), _non_negative(1e7, "V/(m*s)")
+    ]
+    derivative_gain: Annotated[
+        float, QuantityField("derivative_gain"), _non_negative(1e4, "V*s/m")
+    ]
+    derivative_filter_time_constant: TimeConstant
+    integral_limit: Annotated[Voltage, _non_negative(MAX_VOLTAGE, "V")]
 
 
 class SimulationParameters(_Model):
     """Integration settings: control step [s], substeps, integrator, tolerances."""
 
-    control_step: Annotated[Time, Gt(0)]
-    substeps: Annotated[StrictInt, Ge(1)]
+    control_step: ControlStep
+    substeps: StepCount
     integrator: Literal["fixed", "radau", "lsoda"]
-    relative_tolerance: Annotated[Number, Gt(0)]
-    absolute_tolerance: Annotated[Number, Gt(0)]
+    relative_tolerance: OpenFraction
+    absolute_tolerance: OpenFraction
 
 
 class RigSetup(_Model):

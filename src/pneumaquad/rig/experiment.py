@@ -12,7 +12,7 @@ from pneumaquad.params.schema import RigSetup
 from pneumaquad.plotting import plot_rig_run
 from pneumaquad.recording import RunRecorder, write_summary
 from pneumaquad.rig.metrics import general_metrics, step_metrics, tracking_metrics
-from pneumaquad.rig.simulate import RIG_COLUMNS, RigResult, simulate_rig
+from pneumaquad.rig.simulate import RIG_COLUMNS, RigDivergedError, RigResult, simulate_rig
 
 
 def run_rig_experiment(
@@ -31,16 +31,29 @@ def run_rig_experiment(
     ``recording.csv`` (flushed as the run goes) and ``recording.parquet``,
     ``summary.json`` and ``rig.png`` (position, pressures and command, like thesis
     figures 25–28). An interrupted run (Ctrl-C) still writes all of them for the part
-    that ran, with ``"interrupted": true`` in the summary.
+    that ran, with ``"interrupted": true`` in the summary. A run that goes non-finite
+    writes them for the rows before it, with the message under ``"error"`` in the
+    summary, and then raises.
 
     Returns
     -------
     (RigResult, summary dict)
+
+    Raises
+    ------
+    RigDivergedError
+        After writing the folder, when a recorded value became non-finite.
     """
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "parameters.toml").write_text(resolved_parameters_toml(setup), encoding="utf-8")
+    failure: RigDivergedError | None = None
     with RunRecorder(folder, RIG_COLUMNS) as recorder:
-        result = simulate_rig(setup, signal, closed_loop, recorder=recorder, progress=progress)
+        try:
+            result = simulate_rig(
+                setup, signal, closed_loop, recorder=recorder, progress=progress
+            )
+        except RigDivergedError as error:
+            failure, result = error, error.result
     recording = result.recording
     simulated = float(recording["time [s]"][-1]) if recording["time [s]"].size else 0.0
     summary: dict[str, Any] = {
@@ -59,12 +72,16 @@ def run_rig_experiment(
     }
     if extra:
         summary.update(extra)
+    if failure is not None:
+        summary["error"] = str(failure)
     if recording["time [s]"].size:
         summary.update(general_metrics(recording))
-        if closed_loop:
+        if failure is None and closed_loop:
             summary.update(tracking_metrics(recording, setup.actuator.cylinder.stroke))
-        elif step_time is not None:
+        elif failure is None and step_time is not None:
             summary.update(step_metrics(recording, step_time))
         plot_rig_run(recording, folder / "rig.png", title=description)
     write_summary(folder, summary)
+    if failure is not None:
+        raise failure
     return result, summary

@@ -9,6 +9,10 @@ from pathlib import Path
 import numpy as np
 from scipy.io import loadmat
 
+#: Most samples of a recorded reference on the control grid (as the command line's limit
+#: of 10 million control steps per run).
+MAX_REFERENCE_SAMPLES = 10_000_000
+
 
 def time_grid(duration: float, control_step: float) -> np.ndarray:
     """Sample times t_k = k·dt covering [0, duration) [s]."""
@@ -145,5 +149,12 @@ def recorded_reference(
         raise RecordedReferenceError(f"{path}: needs at least two finite samples")
     if np.any(np.diff(times) <= 0):
         raise RecordedReferenceError(f"{path}: time column {time_column!r} is not increasing")
+    samples = (times[-1] - times[0]) / control_step
+    if samples > MAX_REFERENCE_SAMPLES:
+        raise RecordedReferenceError(
+            f"{path}: time column {time_column!r} spans {times[-1] - times[0]:.4g} s, "
+            f"{samples:.3g} control steps of {control_step:g} s; expected at most "
+            f"{MAX_REFERENCE_SAMPLES:,}"
+        )
     grid = times[0] + time_grid(times[-1] - times[0], control_step)
     return np.interp(grid, times, values)

@@ -3,6 +3,10 @@
 Both integrators sample the same way: at every control step k the controller (or the
 open-loop signal) sets the valve command u_k from the state at t_k; the command is held
 until t_{k+1}; row k of the recording is the state at t_{k+1} with the command u_k.
+
+Every row is checked as it is computed: the first non-finite value (NaN or inf) stops
+the run with :class:`RigDivergedError`, naming the quantity and the time, after the rows
+before it have gone to the recorder.
 """
 
 import math
@@ -59,6 +63,24 @@ NORMAL_TEMPERATURE = 273.15
 
 class ReferenceSolverError(ValueError):
     """The adaptive reference cannot integrate this configuration."""
+
+
+#: Columns that are NaN by design: the reference of an open-loop run, the tank pressure
+#: of an ideal supply.
+_REFERENCE_COLUMN = RIG_COLUMNS.index("reference position [m]")
+_TANK_COLUMN = RIG_COLUMNS.index("tank pressure [Pa]")
+#: Names of the kernel states, for messages of the adaptive reference.
+_STATE_NAMES = {
+    layout.S_CAP_PRESSURE: "cap pressure [Pa]",
+    layout.S_ROD_PRESSURE: "rod pressure [Pa]",
+    layout.S_CAP_MASS: "cap mass [kg]",
+    layout.S_ROD_MASS: "rod mass [kg]",
+    layout.S_SPOOL: "spool voltage [V]",
+    layout.S_BRISTLE: "bristle deflection [m]",
+    layout.S_AIR_CONSUMED: "air consumed [kg]",
+    layout.S_POSITION: "position [m]",
+    layout.S_VELOCITY: "velocity [m/s]",
+}
 
 
 @compiled
@@ -147,6 +169,59 @@ class RigResult:
 ProgressCallback = Callable[[int, int], None]
 
 
+class RigDivergedError(RuntimeError):
+    """A rig run produced a non-finite value; the rows before it were recorded.
+
+    Attributes
+    ----------
+    quantity : str
+        Recording column (``"cap pressure [Pa]"``) of the first non-finite value.
+    time : float
+        Sample time of the row holding it [s].
+    result : RigResult
+        The run up to the last finite row.
+    """
+
+    def __init__(self, quantity: str, time: float, result: RigResult) -> None:
+        self.quantity = quantity
+        self.time = time
+        self.result = result
+        rows = result.recording["time [s]"]
+        kept = (
+            f"the recording up to t = {rows[-1]:.6g} s is kept"
+            if rows.size
+            else "nothing before it was recorded"
+        )
+        super().__init__(
+            f"the rig simulation stopped: {quantity} became non-finite at t = {time:.6g} s "
+            f"({kept}); the parameters or the command drive the model where it cannot be "
+            "integrated; try a smaller simulation.control_step, more simulation.substeps "
+            "or other parameter values"
+        )
+
+
+def _skipped_columns(setup: RigSetup, closed_loop: bool) -> list[int]:
+    skipped = [] if closed_loop else [_REFERENCE_COLUMN]
+    if setup.actuator.supply.model != "tank":
+        skipped.append(_TANK_COLUMN)
+    return skipped
+
+
+def first_non_finite(rows: np.ndarray, skipped: list[int]) -> tuple[int, int] | None:
+    """(row, column) of the first non-finite value of ``rows`` outside ``skipped`` columns.
+
+    Rows are searched in order, and within the first bad row the first column in
+    :data:`RIG_COLUMNS` order is named; ``None`` when every value is finite.
+    """
+    bad = ~np.isfinite(rows)
+    bad[:, skipped] = False
+    bad_rows = np.flatnonzero(bad.any(axis=1))
+    if bad_rows.size == 0:
+        return None
+    row = int(bad_rows[0])
+    return row, int(np.flatnonzero(bad[row])[0])
+
+
 def _as_columns(rows: np.ndarray) -> dict[str, np.ndarray]:
     return {name: rows[:, index].copy() for index, name in enumerate(RIG_COLUMNS)}
 
@@ -188,6 +263,12 @@ def simulate_rig(
     RigResult
         On KeyboardInterrupt the result holds the rows computed so far and
         ``interrupted`` is True.
+
+    Raises
+    ------
+    RigDivergedError
+        A value of the recording became non-finite; the rows before it were recorded
+        and travel in the error's ``result``.
     """
     if setup.simulation.integrator != "fixed":
         return simulate_rig_reference(setup, signal, closed_loop, recorder, progress)
@@ -200,6 +281,7 @@ def simulate_rig(
     rows = np.zeros((total, N_COLUMNS))
     dt = setup.simulation.control_step
     substeps = setup.simulation.substeps
+    skipped = _skipped_columns(setup, closed_loop)
     done = 0
     interrupted = False
     started = time.perf_counter()
@@ -221,6 +303,15 @@ def simulate_rig(
                     substeps,
                     rows[done : done + count],
                 )
+                found = first_non_finite(rows[done : done + count], skipped)
+                if found is not None:
+                    row, column = found
+                    _record(recorder, rows[done : done + row])
+                    done += row
+                    result = RigResult(
+                        _as_columns(rows[:done]), False, time.perf_counter() - started, "fixed"
+                    )
+                    raise RigDivergedError(RIG_COLUMNS[column], float(rows[done, 0]), result)
                 _record(recorder, rows[done : done + count])
                 done += count
                 if progress is not None:
@@ -351,6 +442,7 @@ def simulate_rig_reference(
     interrupted = False
     started = time.perf_counter()
     spacer = p[layout.P_SPACER] == 1.0
+    skipped = _skipped_columns(setup, closed_loop)
     with deferred_interrupt() as stop:
         try:
             for k in range(total):
@@ -364,17 +456,38 @@ def simulate_rig_reference(
                     command = float(signal[k])
                 supply_pressure = supply_pressure_now(p, supply)
                 before = y.copy()
-                solution = solve_ivp(
-                    _active_rates,
-                    (0.0, dt),
-                    y[active],
-                    method=method,
-                    rtol=rtol,
-                    atol=atol[active],
-                    jac=_active_jacobian,
-                    args=(p, y, active, command, supply_pressure, scales),
-                )
+                rates = rig_rates(p, y, command, supply_pressure)[active]
+                failure = None
+                if not math.isfinite(command):
+                    failure = "command [V]"
+                elif not np.isfinite(rates).all():
+                    state = int(active[~np.isfinite(rates)][0])
+                    failure = f"the rate of {_STATE_NAMES[state]}"
+                else:
+                    try:
+                        solution = solve_ivp(
+                            _active_rates,
+                            (0.0, dt),
+                            y[active],
+                            method=method,
+                            rtol=rtol,
+                            atol=atol[active],
+                            jac=_active_jacobian,
+                            args=(p, y, active, command, supply_pressure, scales),
+                        )
+                    except ValueError as error:  # scipy refuses NaN/inf in its iteration
+                        failure = f"the solver's iteration ({error})"
+                if failure is not None:
+                    _record(recorder, rows[flushed:k])
+                    result = RigResult(
+                        _as_columns(rows[:k]),
+                        False,
+                        time.perf_counter() - started,
+                        setup.simulation.integrator,
+                    )
+                    raise RigDivergedError(failure, k * dt, result)
                 if not solution.success:
+                    _record(recorder, rows[flushed:k])
                     raise ReferenceSolverError(
                         f"solve_ivp failed at t = {k * dt:.4f} s: {solution.message}"
                     )
@@ -412,6 +525,16 @@ def simulate_rig_reference(
                         p[layout.P_STOP_DAMPING],
                     )
                 write_row(rows[k], (k + 1) * dt, command, reference, p, y, out, supply)
+                found = first_non_finite(rows[k : k + 1], skipped)
+                if found is not None:
+                    _record(recorder, rows[flushed:k])
+                    result = RigResult(
+                        _as_columns(rows[:k]),
+                        False,
+                        time.perf_counter() - started,
+                        setup.simulation.integrator,
+                    )
+                    raise RigDivergedError(RIG_COLUMNS[found[1]], float(rows[k, 0]), result)
                 done = k + 1
                 if done - flushed >= 100 or done == total:
                     _record(recorder, rows[flushed:done])
