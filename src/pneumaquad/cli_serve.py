@@ -40,9 +40,10 @@ ConfigurationOption = Annotated[
 ]
 
 
-def _fail(message: str) -> None:
-    console.print(f"[red]error:[/red] {message}", highlight=False)
-    raise typer.Exit(2)
+def _fail(message: str, status: int = 2) -> None:
+    console.print("[red]error:[/red] ", end="", highlight=False)
+    console.print(message, markup=False, highlight=False)
+    raise typer.Exit(status)
 
 
 def _robot(params: str, overrides: list[str] | None, configuration: str):
@@ -161,11 +162,14 @@ def serve_dynamics(
     _print(summary, ("control steps [count]", "simulated time [s]", "wall time [s]",
                      "malformed [count]", "duplicates [count]", "reordered [count]",
                      "foreign [count]", "timeouts [count]", "refused hellos [count]",
-                     "clamped commands [count]", "achieved rate [Hz]", "jitter p99 [s]",
-                     "overruns [count]"))
+                     "clamped commands [count]", "divergences [count]", "achieved rate [Hz]",
+                     "jitter p99 [s]", "overruns [count]"))
     if request.requested:
         console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
         raise typer.Exit(130)
+    if "error" in summary:
+        _fail(f"{summary['error']} (the last good state was held and the run ended; the "
+              "files hold the part that ran)", status=1)
 
 
 def _serve_thesis(params: str, overrides: list[str] | None, configuration: str, bind: str,
@@ -219,7 +223,12 @@ def serve_actuators(
     """Run cylinders, valves and controllers against a dynamics server (lockstep)."""
     from pneumaquad.interruption import deferred_interrupt
     from pneumaquad.network.actuator_side import ActuatorSide
-    from pneumaquad.network.client import ActuatorClient, NoReplyError, SessionMismatchError
+    from pneumaquad.network.client import (
+        ActuatorClient,
+        DynamicsDivergedError,
+        NoReplyError,
+        SessionMismatchError,
+    )
     from pneumaquad.network.experiments import EXPERIMENTS, make_experiment
     from pneumaquad.recording import create_run_folder
 
@@ -255,6 +264,8 @@ def serve_actuators(
         _fail(f"{error} (is `pneumaquad serve dynamics --command force` running there?)")
     except SessionMismatchError as error:
         _fail(str(error))
+    except DynamicsDivergedError as error:
+        _fail(f"{error}; run folder {folder}", status=1)
     finally:
         client.close()
     console.print(f"run folder: [bold]{folder}[/bold]")

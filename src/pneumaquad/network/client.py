@@ -38,14 +38,18 @@ from pneumaquad.network.run_output import (
     write_run_description,
 )
 from pneumaquad.network.server import StopFlag
-from pneumaquad.network.state import StateMessage, state_from_values
+from pneumaquad.network.state import StateMessage, StatusFlag, state_from_values
 from pneumaquad.network.wire import Message, MessageType
 
-__all__ = ["ActuatorClient", "NoReplyError", "SessionMismatchError"]
+__all__ = ["ActuatorClient", "DynamicsDivergedError", "NoReplyError", "SessionMismatchError"]
 
 
 class NoReplyError(ConnectionError):
     """The dynamics server did not answer within the retry budget."""
+
+
+class DynamicsDivergedError(RuntimeError):
+    """The dynamics server flagged ``DIVERGED``: its simulation diverged and the run ends."""
 
 
 class SessionMismatchError(ConnectionError):
@@ -184,6 +188,10 @@ class ActuatorClient:
                     self.side.command_angles(experiment.references(self.steps))
                 forces = self.side.forces(state)
                 state = self.exchange_forces(forces, state.simulation_time)
+                if state.status & StatusFlag.DIVERGED:
+                    raise DynamicsDivergedError(
+                        f"the dynamics server reports that the simulation diverged at "
+                        f"t = {state.simulation_time:.4g} s (it ends the run)")
                 self.steps += 1
                 self.states.append(state)
                 if recording is not None:

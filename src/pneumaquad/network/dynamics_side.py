@@ -50,9 +50,11 @@ from pneumaquad.layout import (
 )
 from pneumaquad.network.state import StateMessage, StatusFlag
 from pneumaquad.robot.builder import RobotModel
-from pneumaquad.robot.coupling import L_RETRACTED, set_seal_friction
+from pneumaquad.robot.coupling import K_FRESH, L_RETRACTED, set_seal_friction
+from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.linkage import moment_arm
-from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.simulation import RobotSimulation, unstable_quantities
+from pneumaquad.robot.stepping import UNSTABLE_WARNINGS
 
 __all__ = ["COMMAND_KINDS", "DynamicsSide", "piston_readout"]
 
@@ -64,7 +66,7 @@ def piston_readout(model_data: mujoco.MjData, robot: RobotModel, retracted: np.n
     """Piston positions [m] (clipped to the stroke) and velocities [m/s] from the tendons.
 
     These are the values the in-process controllers read: MuJoCo's tendon lengths and
-    velocities of the last kinematics evaluation (the start of the last physics step).
+    velocities of the present state (the dynamics side keeps ``mj_step1`` done).
     """
     lengths = model_data.ten_length[robot.tendon_id]
     positions = np.minimum(np.maximum(lengths - retracted, 0.0), stroke)
@@ -120,6 +122,9 @@ class DynamicsSide:
         self.physics_steps = self.simulation.physics_steps
         self.command = np.zeros(self.joint_count)
         self.safe = False
+        #: Set when a step diverged (the step was undone; see :meth:`step`).
+        self.diverged = False
+        self._last_good: dict[str, object] | None = None
         self._retracted = self.simulation.linkage[:, L_RETRACTED].copy()
         self._stroke = self.simulation.params[:, P_STROKE].copy()
         params = self.simulation.params
@@ -150,6 +155,7 @@ class DynamicsSide:
     def set_pose(self, joint_angles: np.ndarray) -> None:
         """Place the robot at rest at ``joint_angles`` [rad] (actuators reset)."""
         self.simulation.set_pose(np.asarray(joint_angles, dtype=float))
+        self.diverged = False
 
     def apply(self, values: np.ndarray) -> None:
         """Hold ``values`` (one per joint: [V], [N] or [N m]) from the next step on.
@@ -191,11 +197,38 @@ class DynamicsSide:
 
     # --- stepping ----------------------------------------------------------------------
     def step(self) -> None:
-        """Advance exactly one control step with the held command."""
+        """Advance exactly one control step with the held command.
+
+        The same order as the in-process coupling (:mod:`pneumaquad.robot.stepping`):
+        the command acts from the present state, whose kinematics (``mj_step1``) the last
+        ``STATE`` reported; ``mj_step2`` completes the step and ``mj_step1`` prepares the
+        kinematics of the next ``STATE``.
+
+        Raises
+        ------
+        SimulationDivergedError
+            The state went non-finite or huge (MuJoCo's unstable-state warnings, or a
+            cylinder's chambers in valve mode). The step is undone: the last good state
+            is kept, :attr:`diverged` is set and the safe state engaged.
+        """
+        self._last_good = self.simulation.snapshot(self._last_good)
+        try:
+            self._step()
+        except SimulationDivergedError:
+            self.simulation.restore(self._last_good)
+            self.diverged = True
+            self.engage_safe_state()
+            raise
+
+    def _step(self) -> None:
         if self.command_kind == "valve":
             self.simulation.step(1)
             return
         model, data, robot = self.model, self.data, self.robot
+        coupling = self.simulation.coupling
+        before = data.warning.number[UNSTABLE_WARNINGS].copy()
+        if coupling[K_FRESH] == 0:
+            mujoco.mj_step1(model, data)
         if self.command_kind == "force":
             data.ctrl[robot.actuator_id] = self.command
             # The function robot_control_step uses, so both sides agree bit for bit.
@@ -205,9 +238,21 @@ class DynamicsSide:
         else:
             data.ctrl[robot.actuator_id] = 0.0
             data.qfrc_applied[robot.dof_address] = self.command
-        for _ in range(self.physics_steps):
+        if model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
+            mujoco.mj_step(model, data)  # mj_step2 does not integrate RK4
+        else:
+            mujoco.mj_step2(model, data)
+        for _ in range(self.physics_steps - 1):
             mujoco.mj_step(model, data)
+        mujoco.mj_step1(model, data)
+        coupling[K_FRESH] = 1
         self.simulation.steps_taken += 1
+        if np.any(data.warning.number[UNSTABLE_WARNINGS] != before):
+            self.simulation.divergences += 1
+            raise SimulationDivergedError(
+                f"the simulation diverged at t = {self.time:.4g} s: "
+                f"{unstable_quantities(data)} went non-finite or huge in MuJoCo",
+                time=self.time)
 
     # --- readouts ----------------------------------------------------------------------
     @property

@@ -49,6 +49,7 @@ from pneumaquad.network.run_output import (
 from pneumaquad.network.state import StatusFlag
 from pneumaquad.network.timing import jitter_statistics
 from pneumaquad.network.wire import Message, MessageType
+from pneumaquad.robot.errors import SimulationDivergedError
 
 __all__ = ["MODES", "DynamicsServer", "StopFlag"]
 
@@ -114,6 +115,8 @@ class DynamicsServer:
         self.retransmissions = 0  # lockstep commands answered without stepping [count]
         self.wrong_commands = 0  # commands of another kind than served [count]
         self.timeouts = 0  # realtime safe-state engagements [count]
+        self.divergences = 0  # steps that diverged (the run then ends) [count]
+        self.divergence: str | None = None  # the divergence's message
         self.refused_hellos = 0  # HELLOs with other dimensions than the server's [count]
         self.wakeups: list[float] = []
         self._pending = StatusFlag.NONE  # one-shot flags for the next STATE
@@ -140,6 +143,8 @@ class DynamicsServer:
             flags |= StatusFlag.COMMAND_TIMED_OUT
         if self.side.safe:
             flags |= StatusFlag.SAFE_STATE
+        if self.side.diverged:
+            flags |= StatusFlag.DIVERGED
         elif self.side.command_clamped:
             flags |= StatusFlag.CLAMPED
         return flags
@@ -161,7 +166,18 @@ class DynamicsServer:
             self._recording.append(row)
 
     def _advance(self) -> None:
-        self.side.step()
+        try:
+            self.side.step()
+        except SimulationDivergedError as error:
+            # The side undid the step and engaged the safe state: flag it in the STATE
+            # that answers and in the recording, count it, and end the run.
+            self.divergences += 1
+            self.divergence = str(error)
+            self._stopping = True
+            if self._recording is not None:
+                row = np.append(self.side.recording_row(), float(self.status() | self._pending))
+                self._recording.append(row)
+            return
         self.steps += 1
         self._record()
 
@@ -283,7 +299,10 @@ class DynamicsServer:
             "timeouts [count]": self.timeouts,
             "refused hellos [count]": self.refused_hellos,
             "clamped commands [count]": self.side.clamped_commands,
+            "divergences [count]": self.divergences,
         } | self.endpoint.counters()
+        if self.divergence is not None:
+            self.summary["error"] = self.divergence
         if self.wakeups:
             self.summary |= jitter_statistics(np.array(self.wakeups), self.side.control_step)
         self.endpoint.close()

@@ -42,6 +42,7 @@ class StatusFlag(IntFlag):
     COMMAND_TIMED_OUT = 2  # bit 1: no valid command within the timeout
     RESYNCHRONISED = 4  # bit 2: sequence tracking was reset (HELLO or long silence)
     CLAMPED = 8  # bit 3: the held command was clamped to what the actuators can deliver
+    DIVERGED = 16  # bit 4: the simulation diverged; the last good state is held, run ends
 
 
 def state_value_count(joint_count: int) -> int:

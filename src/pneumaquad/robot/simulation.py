@@ -452,6 +452,41 @@ class RobotSimulation:
                 time=self.time,
             )
 
+    # --- snapshots -------------------------------------------------------------------
+    _SNAPSHOT_ARRAYS = ("state", "supply", "outputs", "pid_state", "force_reference",
+                        "coupling", "commands", "positions", "velocities",
+                        "reference_positions", "reference_angles", "extra",
+                        "open_loop_voltage", "gain_scale")
+
+    def snapshot(self, into: dict[str, object] | None = None) -> dict[str, object]:
+        """A copy of everything :meth:`step` changes (MuJoCo data, the seal friction it
+        writes into the model, actuator and controller state), for :meth:`restore`;
+        written into an earlier snapshot ``into`` when given (no allocation)."""
+        tendons = self.robot.tendon_id
+        if into is None:
+            into = {name: getattr(self, name).copy() for name in self._SNAPSHOT_ARRAYS}
+            into["data"] = mujoco.MjData(self.model)
+            into["frictionloss"] = self.model.tendon_frictionloss[tendons].copy()
+            into["damping"] = self.model.tendon_damping[tendons].copy()
+        else:
+            for name in self._SNAPSHOT_ARRAYS:
+                into[name][...] = getattr(self, name)  # type: ignore[index]
+            into["frictionloss"][...] = self.model.tendon_frictionloss[tendons]  # type: ignore[index]
+            into["damping"][...] = self.model.tendon_damping[tendons]  # type: ignore[index]
+        mujoco.mj_copyData(into["data"], self.model, self.data)
+        into["steps_taken"] = self.steps_taken
+        return into
+
+    def restore(self, snapshot: dict[str, object]) -> None:
+        """Return to a :meth:`snapshot` (the divergence counter is kept)."""
+        mujoco.mj_copyData(self.data, self.model, snapshot["data"])
+        for name in self._SNAPSHOT_ARRAYS:
+            getattr(self, name)[...] = snapshot[name]
+        tendons = self.robot.tendon_id
+        self.model.tendon_frictionloss[tendons] = snapshot["frictionloss"]
+        self.model.tendon_damping[tendons] = snapshot["damping"]
+        self.steps_taken = int(snapshot["steps_taken"])  # type: ignore[arg-type]
+
     # --- readouts --------------------------------------------------------------------
     def chamber_pressures(self) -> np.ndarray:
         """(joints, 2) cap and rod pressures [Pa], absolute."""
