@@ -263,7 +263,7 @@ def robot_walk(
     = True,
     force_gain: Annotated[float, typer.Option(
         callback=_within(1e-6, 1.0, "V/N"),
-        help="Force tracking gain of the stance cylinders [V/N], 1e-6 to 1.")] = 0.01,
+        help="Force tracking gain of the stance cylinders [V/N], 1e-6 to 1.")] = 0.015,
     swing_from_ground: Annotated[bool, typer.Option(
         "--swing-from-ground/--swing-from-body",
         help="Swing height above the ground at lift-off (robot.swing_control), or "

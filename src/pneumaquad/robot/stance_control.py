@@ -53,15 +53,16 @@ class StanceControlSettings:
     ----------
     force_gain : float [V/N]
         Valve voltage per newton of cylinder force error (force tracking gain k_F). The
-        position loop then acts as a spring of Kp / k_F: with beta's Kp = 150 V/m and
-        0.01 V/N, 15 N/mm at the piston.
+        position loop then acts as a spring of stiffness·Kp / k_F: with beta's Kp =
+        150 V/m, 0.015 V/N and the stiffness factor 2, 20 N/mm at the piston. 0.015 V/N
+        from walks on the three terrains (docs/robot.md); 0.01 V/N rocked more on the ramp.
     rise : float
         Cycle fraction over which a leg's load share rises after touchdown.
     fall : float
         Cycle fraction over which it falls before lift-off.
     """
 
-    force_gain: float = 0.01
+    force_gain: float = 0.015
     rise: float = 0.01
     fall: float = 0.04
     stiffness: float = 2.0
