@@ -98,6 +98,7 @@ class ConsoleApp:
         self.real_time = real_time
         self.running = False
         self.message = ""
+        self._last_good: dict[str, object] | None = None  # snapshot before each chunk
         self.lock = threading.RLock()
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.server.scene.set_up_direction("+z")
@@ -210,12 +211,16 @@ class ConsoleApp:
                 self.walking.place_front_feet(
                     {leg: state.target for leg, state in self.teleop.legs.items()})
             self.walking.before_chunk(count * self.simulation.control_step)
+            self._last_good = self.simulation.snapshot(self._last_good)
             try:
                 self.simulation.step(count)
             except SimulationDivergedError as error:
+                # the safe state: paused at the last good state, the divergence shown
+                self.simulation.restore(self._last_good)
                 self.running = False
-                self.message = str(error)
-                initial_pose(self.simulation)
+                self.message = (f"{error} — paused at the last good state, t = "
+                                f"{self.simulation.time:.3f} s (divergences so far: "
+                                f"{self.simulation.divergences}); Reset to start again")
             self.refresh()
             if self.devices is not None and self.feedback is not None:
                 self.devices.send_feedback(self.simulation, self.teleop, self.feedback)
