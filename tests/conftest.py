@@ -9,10 +9,11 @@ from __future__ import annotations
 import functools
 import math
 import signal
+import socket
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -147,3 +148,13 @@ def interrupt_when_recording(
     finally:
         process.kill()
     return process.returncode, stderr
+
+
+@pytest.fixture
+def client_socket() -> Iterator[socket.socket]:
+    """A UDP socket on 127.0.0.1 (any free port) with a 2 s receive timeout."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.bind(("127.0.0.1", 0))
+    sock.settimeout(2.0)
+    yield sock
+    sock.close()

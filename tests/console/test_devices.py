@@ -50,14 +50,6 @@ def app() -> Iterator[ConsoleApp]:
     console.close()
 
 
-@pytest.fixture
-def client() -> Iterator[socket.socket]:
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(2.0)
-    yield sock
-    sock.close()
-
 
 def _wait_for(server: DeviceServer, leg_index: int, sequence: int) -> None:
     deadline = time.monotonic() + 2.0
@@ -103,7 +95,7 @@ def test_device_messages_round_trip_with_their_layout() -> None:
     assert error.value.reason == "bad_count"
 
 
-def test_malformed_datagrams_are_counted_and_ignored(client: socket.socket) -> None:
+def test_malformed_datagrams_are_counted_and_ignored(client_socket: socket.socket) -> None:
     server = DeviceServer()
     try:
         assert server.host == "127.0.0.1" and server.port > 0
@@ -119,24 +111,24 @@ def test_malformed_datagrams_are_counted_and_ignored(client: socket.socket) -> N
             struct.pack(HEADER_FORMAT, MAGIC, VERSION, 99, 4, 0.0, 0, 0),  # unknown_type
         ]
         for datagram in [*bad, encode_ping(4, 0.0), valid, valid]:  # + a duplicate
-            client.sendto(datagram, address)
+            client_socket.sendto(datagram, address)
         _wait_for(server, FRONT_RIGHT, 5)
         time.sleep(0.05)  # the duplicate
         assert server.malformed == {"truncated": 1, "bad_magic": 1, "bad_count": 3,
                                     "non_finite": 1, "unknown_type": 1}
         assert server.ignored == 1 and server.dropped_old == 1
         received = server.latest(FRONT_RIGHT)
-        assert received is not None and received.sender == client.getsockname()
+        assert received is not None and received.sender == client_socket.getsockname()
         np.testing.assert_array_equal(received.input.position, [0.0, 0.0, 0.02])
         assert server.latest(0) is None
     finally:
         server.close()
 
 
-def test_stale_input_is_ignored(client: socket.socket) -> None:
+def test_stale_input_is_ignored(client_socket: socket.socket) -> None:
     server = DeviceServer(stale_timeout=0.5)
     try:
-        client.sendto(encode_device_input(0, 0.0, FRONT_RIGHT, np.zeros(3), 1),
+        client_socket.sendto(encode_device_input(0, 0.0, FRONT_RIGHT, np.zeros(3), 1),
                       ("127.0.0.1", server.port))
         _wait_for(server, FRONT_RIGHT, 0)
         arrival = server.latest(FRONT_RIGHT).arrival
@@ -151,7 +143,7 @@ def test_stale_input_is_ignored(client: socket.socket) -> None:
 
 
 def test_engaged_device_drives_the_foot_and_gets_feedback(app: ConsoleApp,
-                                                          client: socket.socket) -> None:
+                                                          client_socket: socket.socket) -> None:
     app.reset()
     app.advance(500)  # standing
     leg = app.teleop.legs["front_right"]
@@ -159,7 +151,7 @@ def test_engaged_device_drives_the_foot_and_gets_feedback(app: ConsoleApp,
 
     before = simulation.reference_angles[leg.joints].copy()
     position = np.array([-0.01, 0.0, 0.0])  # press the foot 1 cm down (thorax x is up)
-    client.sendto(encode_device_input(10, time.monotonic(), FRONT_RIGHT, position,
+    client_socket.sendto(encode_device_input(10, time.monotonic(), FRONT_RIGHT, position,
                                       BUTTON_ENGAGE), ("127.0.0.1", app.devices.server.port))
     _wait_for(app.devices.server, FRONT_RIGHT, 10)
     app.advance(20)
@@ -175,7 +167,7 @@ def test_engaged_device_drives_the_foot_and_gets_feedback(app: ConsoleApp,
         pressed.append(simulation.foot_normal_forces()[FRONT_RIGHT])
     # the foot stands on the ground: pressed down, it takes more of the robot's weight
     assert np.mean(pressed) > load + 1.0  # measured +2.9 N (12.9 N before)
-    feedback = decode_device_feedback(_latest_feedback(client))
+    feedback = decode_device_feedback(_latest_feedback(client_socket))
     assert feedback.leg_index == FRONT_RIGHT and not feedback.clamped
     assert feedback.simulation_time == pytest.approx(simulation.time)
     assert np.all(np.isfinite(feedback.force)) and 0.0 < np.linalg.norm(feedback.force) <= 3.3
@@ -187,10 +179,10 @@ def test_engaged_device_drives_the_foot_and_gets_feedback(app: ConsoleApp,
     assert arrows.shape == (2, 2, 3) and app.feedback_arrows.segments.visible
 
 
-def test_released_button_leaves_the_target(app: ConsoleApp, client: socket.socket) -> None:
+def test_released_button_leaves_the_target(app: ConsoleApp, client_socket: socket.socket) -> None:
     app.reset()
     leg = app.teleop.legs["front_right"]
-    client.sendto(encode_device_input(20, time.monotonic(), FRONT_RIGHT,
+    client_socket.sendto(encode_device_input(20, time.monotonic(), FRONT_RIGHT,
                                       np.array([0.0, 0.0, 0.03]), 0),
                   ("127.0.0.1", app.devices.server.port))
     _wait_for(app.devices.server, FRONT_RIGHT, 20)
@@ -200,11 +192,11 @@ def test_released_button_leaves_the_target(app: ConsoleApp, client: socket.socke
 
 
 def test_stale_input_does_not_move_the_console_foot(app: ConsoleApp,
-                                                    client: socket.socket) -> None:
+                                                    client_socket: socket.socket) -> None:
     app.reset()
     leg = app.teleop.legs["front_right"]
     server = app.devices.server
-    client.sendto(encode_device_input(30, time.monotonic(), FRONT_RIGHT,
+    client_socket.sendto(encode_device_input(30, time.monotonic(), FRONT_RIGHT,
                                       np.array([0.0, 0.0, 0.03]), BUTTON_ENGAGE),
                   ("127.0.0.1", server.port))
     _wait_for(server, FRONT_RIGHT, 30)

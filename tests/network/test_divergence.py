@@ -6,7 +6,6 @@ from __future__ import annotations
 import socket
 import struct
 import threading
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -63,17 +62,9 @@ def _datagram(sequence: int, sender_time: float, values: np.ndarray) -> bytes:
         struct.pack(f"<{len(values)}d", *values)
 
 
-@pytest.fixture
-def client() -> Iterator[socket.socket]:
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(2.0)
-    yield sock
-    sock.close()
-
 
 def test_lockstep_server_flags_counts_and_ends_on_divergence(
-        tmp_path: Path, client: socket.socket) -> None:
+        tmp_path: Path, client_socket: socket.socket) -> None:
     side = _side()
     server = DynamicsServer(side, ("127.0.0.1", 0), mode="lockstep", duration=30.0,
                             folder=tmp_path)
@@ -82,8 +73,8 @@ def test_lockstep_server_flags_counts_and_ends_on_divergence(
     statuses, times = [], []
     simulated = 0.0
     for step in range(200):
-        client.sendto(_datagram(step, simulated, _alternating(step)), server.address)
-        data = client.recv(4096)
+        client_socket.sendto(_datagram(step, simulated, _alternating(step)), server.address)
+        data = client_socket.recv(4096)
         _, _, kind, _, _, count, _ = HEADER.unpack_from(data)
         assert kind == STATE
         state = state_from_values(

@@ -6,7 +6,6 @@ import socket
 import struct
 import threading
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -60,14 +59,6 @@ def _serve(server: DynamicsServer) -> threading.Thread:
     thread.start()
     return thread
 
-
-@pytest.fixture
-def client_socket() -> Iterator[socket.socket]:
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(2.0)
-    yield sock
-    sock.close()
 
 
 def test_external_client_moves_the_robot_with_valve_commands(

@@ -5,7 +5,6 @@ from __future__ import annotations
 import socket
 import struct
 import threading
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -51,14 +50,6 @@ def _side(kind: str, configuration: str = "fixed", overrides: tuple[str, ...] = 
 def force_side() -> DynamicsSide:
     return _side("force")
 
-
-@pytest.fixture
-def client_socket() -> Iterator[socket.socket]:
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind(("127.0.0.1", 0))
-    sock.settimeout(2.0)
-    yield sock
-    sock.close()
 
 
 def _serve(server: DynamicsServer) -> threading.Thread:
