@@ -231,6 +231,16 @@ def _record(recorder: RunRecorder | None, block: np.ndarray) -> None:
         recorder.append(block)
 
 
+def _stop_diverged(recorder: RunRecorder | None, rows: np.ndarray, flushed: int, good: int,
+                   quantity: str, when: float, started: float, integrator: str) -> None:
+    """Record rows ``flushed:good`` (the last good one is ``good - 1``) and raise
+    :class:`RigDivergedError` naming ``quantity`` and ``when`` [s]."""
+    _record(recorder, rows[flushed:good])
+    result = RigResult(_as_columns(rows[:good]), False, time.perf_counter() - started,
+                       integrator)
+    raise RigDivergedError(quantity, when, result)
+
+
 def simulate_rig(
     setup: RigSetup,
     signal: np.ndarray,
@@ -306,12 +316,8 @@ def simulate_rig(
                 found = first_non_finite(rows[done : done + count], skipped)
                 if found is not None:
                     row, column = found
-                    _record(recorder, rows[done : done + row])
-                    done += row
-                    result = RigResult(
-                        _as_columns(rows[:done]), False, time.perf_counter() - started, "fixed"
-                    )
-                    raise RigDivergedError(RIG_COLUMNS[column], float(rows[done, 0]), result)
+                    _stop_diverged(recorder, rows, done, done + row, RIG_COLUMNS[column],
+                                   float(rows[done + row, 0]), started, "fixed")
                 _record(recorder, rows[done : done + count])
                 done += count
                 if progress is not None:
@@ -478,14 +484,8 @@ def simulate_rig_reference(
                     except ValueError as error:  # scipy refuses NaN/inf in its iteration
                         failure = f"the solver's iteration ({error})"
                 if failure is not None:
-                    _record(recorder, rows[flushed:k])
-                    result = RigResult(
-                        _as_columns(rows[:k]),
-                        False,
-                        time.perf_counter() - started,
-                        setup.simulation.integrator,
-                    )
-                    raise RigDivergedError(failure, k * dt, result)
+                    _stop_diverged(recorder, rows, flushed, k, failure, k * dt, started,
+                                   setup.simulation.integrator)
                 if not solution.success:
                     _record(recorder, rows[flushed:k])
                     raise ReferenceSolverError(
@@ -527,14 +527,8 @@ def simulate_rig_reference(
                 write_row(rows[k], (k + 1) * dt, command, reference, p, y, out, supply)
                 found = first_non_finite(rows[k : k + 1], skipped)
                 if found is not None:
-                    _record(recorder, rows[flushed:k])
-                    result = RigResult(
-                        _as_columns(rows[:k]),
-                        False,
-                        time.perf_counter() - started,
-                        setup.simulation.integrator,
-                    )
-                    raise RigDivergedError(RIG_COLUMNS[found[1]], float(rows[k, 0]), result)
+                    _stop_diverged(recorder, rows, flushed, k, RIG_COLUMNS[found[1]],
+                                   float(rows[k, 0]), started, setup.simulation.integrator)
                 done = k + 1
                 if done - flushed >= 100 or done == total:
                     _record(recorder, rows[flushed:done])
