@@ -76,20 +76,10 @@ def pid_loop(count, gains, pid_state, references, positions, dt):
 
 
 @njit(cache=False)
-def control_loop(
-    count, ten_length, ten_velocity, tendon_ids, actuator_ids, ctrl, frictionloss, damping,
-    linkage, seal, mujoco_friction, params, state, supply, outputs, gains, gain_scale, extra,
-    pid_state, force_reference, reference_angles, open_loop_voltage, commands, positions,
-    velocities, reference_positions, coupling, dt, substeps,
-):  # fmt: skip
+def control_loop(count, mujoco, cylinders, actuators, controllers, trace, coupling, settings):
     """``count`` calls of the whole control step (no MuJoCo step) from compiled code."""
     for _ in range(count):
-        robot_control_step(
-            ten_length, ten_velocity, tendon_ids, actuator_ids, ctrl, frictionloss, damping,
-            linkage, seal, mujoco_friction, params, state, supply, outputs, gains, gain_scale,
-            extra, pid_state, force_reference, reference_angles, open_loop_voltage, commands,
-            positions, velocities, reference_positions, coupling, dt, substeps,
-        )  # fmt: skip
+        robot_control_step(mujoco, cylinders, actuators, controllers, trace, coupling, settings)
 
 
 def standing_simulation(overrides: list[str] | None = None) -> RobotSimulation:
@@ -172,19 +162,13 @@ def time_kernel(sim: RobotSimulation, steps: int) -> float:
 
 
 def time_control_step(sim: RobotSimulation, steps: int) -> float:
-    d, m = sim.data, sim.model
-    args = (
-        d.ten_length.copy(), d.ten_velocity.copy(), sim.robot.tendon_id, sim.robot.actuator_id,
-        d.ctrl.copy(), m.tendon_frictionloss.copy(), m.tendon_damping.copy(), sim.linkage,
-        sim.seal, sim.mujoco_friction, sim.params, sim.state.copy(), sim.supply.copy(),
-        sim.outputs.copy(), sim.gains, sim.gain_scale, sim.extra, sim.pid_state.copy(),
-        sim.force_reference.copy(), sim.reference_angles.copy(), sim.open_loop_voltage.copy(),
-        sim.commands.copy(), sim.positions.copy(), sim.velocities.copy(),
-        sim.reference_positions.copy(), np.ones_like(sim.coupling), sim.control_step,
-        sim.substeps,
-    )  # fmt: skip
+    """The control step on copies of the simulation's arrays (its state is left as is)."""
+    copies = [bundle._make(array.copy() for array in bundle) for bundle in (
+        sim.mujoco, sim.cylinders, sim.actuators, sim.controllers, sim.trace)]
+    coupling = sim.coupling.copy()
+    coupling["pending"] = 1  # the kernel integrates every step, as in a run
     start = time.perf_counter()
-    control_loop(steps, *args)
+    control_loop(steps, *copies, coupling, sim.step_settings)
     return (time.perf_counter() - start) / steps
 
 

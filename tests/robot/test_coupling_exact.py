@@ -183,3 +183,34 @@ def test_chunk_size_does_not_change_the_run(chunk: int) -> None:
         return np.concatenate([simulation.data.qpos, simulation.state.ravel()])
 
     np.testing.assert_array_equal(run(chunk), run(70))
+
+
+def test_recording_columns_hold_what_their_names_say() -> None:
+    """Each recorded piston column is the linkage position of its own angle column: a
+    swap of same-shaped arrays (positions and references, say) between the simulation
+    and the compiled step or the recording shows here."""
+    from pneumaquad.robot.recording import recording_columns, recording_row
+
+    simulation = RobotSimulation(build_robot(load_robot("crr-quadruped"), "fixed"))
+    simulation.set_pose(POSE)
+    target = POSE.copy()
+    target[5] += np.radians(20.0)
+    simulation.command_angles(target)
+    columns = recording_columns(simulation)
+    rows = []
+    for _ in range(20):
+        simulation.step(CHUNK)
+        rows.append(recording_row(simulation, simulation.reference_angles))
+    recording = dict(zip(columns, np.array(rows).T, strict=True))
+    for i, joint in enumerate(simulation.robot.joint_names):
+        linkage = simulation.linkage[i]
+        stroke = simulation.params[i, P_STROKE]
+        angle, reference = recording[f"{joint} angle [rad]"], recording[f"{joint} reference [rad]"]
+        position = [piston_from_angle(linkage, value) for value in angle]
+        wanted = [min(max(piston_from_angle(linkage, value), 0.0), stroke) for value in reference]
+        np.testing.assert_allclose(recording[f"{joint} piston position [m]"], position,
+                                   rtol=0.0, atol=1e-9)
+        np.testing.assert_allclose(recording[f"{joint} piston reference [m]"], wanted,
+                                   rtol=0.0, atol=1e-12)
+    gamma = recording["front_right_gamma piston position [m]"]
+    assert np.ptp(gamma) > 0.005  # the step moved the piston: position and reference differ

@@ -17,7 +17,6 @@ from pneumaquad.control.pid import G_KD, G_KI, G_KP
 from pneumaquad.params import load_robot
 from pneumaquad.recording import read_recording
 from pneumaquad.robot.builder import build_robot
-from pneumaquad.robot.coupling import X_FORCE_GAIN
 from pneumaquad.robot.experiment import run_phases
 from pneumaquad.robot.scenarios import (
     STANDING_ANGLES,
@@ -40,7 +39,7 @@ def _alpha_step_overshoot(force_gain: float) -> float:
     sim.set_pose(pose)
     sim.command_angles(pose)
     sim.gains[:, G_KP], sim.gains[:, G_KI], sim.gains[:, G_KD] = 150.0, 0.0, 3.0
-    sim.extra[:, X_FORCE_GAIN] = force_gain
+    sim.joint_control["force_feedback_gain"] = force_gain
     sim.step(1000)
     target = pose.copy()
     target[3] += np.radians(25.0)

@@ -8,7 +8,6 @@ import pytest
 
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
-from pneumaquad.robot.coupling import F_COULOMB, F_STATIC
 from pneumaquad.robot.simulation import RobotSimulation
 from pneumaquad.robot.stance_control import track_stance_loads
 
@@ -21,7 +20,7 @@ def _stand_with_a_leg_length_error(error_degrees: float, shares: np.ndarray | No
 
     sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
     if not seal_friction:
-        sim.seal[:, [F_STATIC, F_COULOMB]] = 0.0
+        sim.seal["static_force"] = sim.seal["coulomb_force"] = 0.0
     pose = np.tile(STANDING_ANGLES, 4)  # gamma 90°: legs nearly upright under the hips
     height = standing_height(sim, STANDING_ANGLES) + 0.003
     sim.set_pose(pose, thorax_position=np.array([0.0, 0.0, height]))

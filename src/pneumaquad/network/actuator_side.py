@@ -21,7 +21,7 @@ import numpy as np
 
 from pneumaquad.network.state import StateMessage
 from pneumaquad.robot.builder import RobotModel
-from pneumaquad.robot.coupling import L_RETRACTED, robot_control_step
+from pneumaquad.robot.coupling import MujocoBuffers, robot_control_step
 from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["ActuatorSide"]
@@ -56,14 +56,13 @@ class ActuatorSide:
         self.control_step = self.simulation.control_step
         self.substeps = self.simulation.substeps
         count = self.joint_count
-        self._tendon_ids = np.arange(count)
-        self._actuator_ids = np.arange(count)
-        self._control = np.zeros(count)
-        self._frictionloss = np.zeros(count)
-        self._damping = np.zeros(count)
-        self._lengths = np.zeros(count)
-        self._velocities = np.zeros(count)
-        self._retracted = self.simulation.linkage[:, L_RETRACTED].copy()
+        # This side's own tendon arrays, filled from each STATE (no MuJoCo here).
+        self._tendons = MujocoBuffers(
+            tendon_length=np.zeros(count), tendon_velocity=np.zeros(count),
+            control=np.zeros(count), tendon_frictionloss=np.zeros(count),
+            tendon_damping=np.zeros(count), tendon_ids=np.arange(count),
+            actuator_ids=np.arange(count))
+        self._retracted = self.simulation.linkage["retracted_length"].copy()
         self.steps_taken = 0
 
     # --- set-up and commands -----------------------------------------------------------
@@ -113,18 +112,13 @@ class ActuatorSide:
         positions = np.asarray(state.piston_positions, dtype=np.float64)
         if positions.size != self.joint_count:
             raise ValueError(f"STATE has {positions.size} joints, the robot {self.joint_count}")
-        np.add(positions, self._retracted, out=self._lengths)
-        self._velocities[:] = state.piston_velocities
-        robot_control_step(
-            self._lengths, self._velocities, self._tendon_ids, self._actuator_ids,
-            self._control, self._frictionloss, self._damping, s.linkage, s.seal, True,
-            s.params, s.state, s.supply, s.outputs, s.gains, s.gain_scale, s.extra,
-            s.pid_state, s.force_reference, s.reference_angles, s.open_loop_voltage, s.commands,
-            s.positions, s.velocities, s.reference_positions, s.coupling, s.control_step,
-            s.substeps,
-        )
+        tendons = self._tendons
+        np.add(positions, self._retracted, out=tendons.tendon_length)
+        tendons.tendon_velocity[:] = state.piston_velocities
+        robot_control_step(tendons, s.cylinders, s.actuators, s.controllers, s.trace,
+                           s.coupling, s.step_settings)
         self.steps_taken += 1
-        return self._control.copy()
+        return tendons.control.copy()
 
     # --- readouts ----------------------------------------------------------------------
     def valve_commands(self) -> np.ndarray:

@@ -50,7 +50,7 @@ from pneumaquad.layout import (
 )
 from pneumaquad.network.state import StateMessage, StatusFlag
 from pneumaquad.robot.builder import RobotModel
-from pneumaquad.robot.coupling import K_FRESH, L_RETRACTED, set_seal_friction
+from pneumaquad.robot.coupling import set_seal_friction
 from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.linkage import moment_arm
 from pneumaquad.robot.simulation import RobotSimulation, unstable_quantities
@@ -125,7 +125,7 @@ class DynamicsSide:
         #: Set when a step diverged (the step was undone; see :meth:`step`).
         self.diverged = False
         self._last_good: dict[str, object] | None = None
-        self._retracted = self.simulation.linkage[:, L_RETRACTED].copy()
+        self._retracted = self.simulation.linkage["retracted_length"].copy()
         self._stroke = self.simulation.params[:, P_STROKE].copy()
         params = self.simulation.params
         self.voltage_limits = params[:, [P_UMIN, P_UMAX]].copy()
@@ -227,14 +227,13 @@ class DynamicsSide:
         model, data, robot = self.model, self.data, self.robot
         coupling = self.simulation.coupling
         before = data.warning.number[UNSTABLE_WARNINGS].copy()
-        if coupling[K_FRESH] == 0:
+        if coupling["fresh"][0] == 0:
             mujoco.mj_step1(model, data)
         if self.command_kind == "force":
             data.ctrl[robot.actuator_id] = self.command
             # The function robot_control_step uses, so both sides agree bit for bit.
             for index in range(robot.joint_count):
-                set_seal_friction(self.simulation.seal, robot.tendon_id, data.ten_velocity,
-                                  model.tendon_frictionloss, model.tendon_damping, index)
+                set_seal_friction(self.simulation.mujoco, self.simulation.seal, index)
         else:
             data.ctrl[robot.actuator_id] = 0.0
             data.qfrc_applied[robot.dof_address] = self.command
@@ -245,7 +244,7 @@ class DynamicsSide:
         for _ in range(self.physics_steps - 1):
             mujoco.mj_step(model, data)
         mujoco.mj_step1(model, data)
-        coupling[K_FRESH] = 1
+        coupling["fresh"] = 1
         self.simulation.steps_taken += 1
         if np.any(data.warning.number[UNSTABLE_WARNINGS] != before):
             self.simulation.divergences += 1

@@ -25,6 +25,7 @@ No Python loop over actuators.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -55,90 +56,138 @@ from pneumaquad.layout import (
 from pneumaquad.physics.friction import stribeck_curve
 from pneumaquad.pneumatics import friction_of, friction_slope_of, state_outputs
 
-# Per-joint linkage rows: l1, l3, γ0, l2, direction (see pneumaquad.robot.linkage).
-L_CHILD = 0
-L_PARENT = 1
-L_GAMMA_ZERO = 2
-L_RETRACTED = 3
-L_DIRECTION = 4
-N_LINKAGE = 5
+#: One cylinder linkage (pneumaquad.robot.linkage, eq 5.2.1-5.2.6).
+LINKAGE_DTYPE = np.dtype([
+    ("child_pivot_radius", "f8"),  # l1 [m]: joint axis to the rod pin
+    ("parent_pivot_radius", "f8"),  # l3 [m]: joint axis to the barrel pivot
+    ("included_angle_at_zero", "f8"),  # γ0 [rad]: included angle at θ = 0
+    ("retracted_length", "f8"),  # l2 [m]: pin-to-pin length at x = 0
+    ("direction", "f8"),  # ±1: γ = γ0 ± θ
+])
 
-# Per-joint seal friction rows for MuJoCo's dry friction: Fs, Fc, vS, i, viscous.
-F_STATIC = 0
-F_COULOMB = 1
-F_STRIBECK_VELOCITY = 2
-F_EXPONENT = 3
-F_VISCOUS = 4
-N_SEAL = 5
+#: One cylinder's seal friction as MuJoCo dry friction (Stribeck curve eq 4.2.6 + viscous).
+SEAL_DTYPE = np.dtype([
+    ("static_force", "f8"),  # Fs [N]
+    ("coulomb_force", "f8"),  # Fc [N]
+    ("stribeck_velocity", "f8"),  # vS [m/s]
+    ("stribeck_exponent", "f8"),  # i [-]
+    ("viscous_coefficient", "f8"),  # [N s/m]
+])
 
-# Per-joint extra controller settings.
-X_FORCE_GAIN = 0  # force feedback gain [V/N]
-X_FORCE_TAU = 1  # low-pass time constant of the force mean [s]
-X_COMMANDED = 2  # 1: closed loop, 0: valve held at its offset, 2: open loop voltage
-X_FORCE_TRACKING = 3  # force tracking gain [V/N]; > 0: force_reference is a set-point
-X_FORCE_STIFFNESS = 4  # factor on Kp and Kd while tracking forces (the stance's spring)
-N_EXTRA = 5
+#: One joint's control settings besides the PID gains.
+JOINT_CONTROL_DTYPE = np.dtype([
+    ("mode", "i8"),  # MODE_UNCOMMANDED, MODE_CLOSED_LOOP or MODE_OPEN_LOOP
+    ("force_feedback_gain", "f8"),  # pressure feedback about the force mean [V/N]
+    ("force_feedback_time_constant", "f8"),  # low-pass of that mean [s]
+    ("force_tracking_gain", "f8"),  # k_F [V/N]; > 0: force_reference is a set-point
+    ("force_stiffness", "f8"),  # factor on Kp and Kd while tracking forces [-]
+])
 
-MODE_UNCOMMANDED = 0.0
-MODE_CLOSED_LOOP = 1.0
-MODE_OPEN_LOOP = 2.0
+MODE_UNCOMMANDED = 0  # valve held at its offset
+MODE_CLOSED_LOOP = 1  # PID on the piston position of the joint-angle reference
+MODE_OPEN_LOOP = 2  # valve at open_loop_voltage
 
-# Coupling flags (one small int array per simulation).
-K_PENDING = 0  # 1: the chambers are one interval behind the present kinematics
-K_FRESH = 1  # 1: MuJoCo's position and velocity stages ran for the present state
-N_COUPLING = 2
+#: The coupling's bookkeeping (one record per simulation).
+COUPLING_DTYPE = np.dtype([
+    ("pending", "i8"),  # 1: the chambers are one interval behind the present kinematics
+    ("fresh", "i8"),  # 1: MuJoCo's position and velocity stages ran for the present state
+])
+
+
+class MujocoBuffers(NamedTuple):
+    """One simulation's MuJoCo arrays the control step reads and writes (views)."""
+
+    tendon_length: np.ndarray  # data.ten_length [m]
+    tendon_velocity: np.ndarray  # data.ten_velocity [m/s]
+    control: np.ndarray  # data.ctrl: cylinder forces [N]
+    tendon_frictionloss: np.ndarray  # model.tendon_frictionloss [N]
+    tendon_damping: np.ndarray  # model.tendon_damping [N s/m]
+    tendon_ids: np.ndarray  # tendon of each cylinder
+    actuator_ids: np.ndarray  # motor of each cylinder
+
+
+class Cylinders(NamedTuple):
+    """Per cylinder: linkage (LINKAGE_DTYPE) and seal friction (SEAL_DTYPE)."""
+
+    linkage: np.ndarray
+    seal: np.ndarray
+
+
+class ActuatorArrays(NamedTuple):
+    """The pneumatic kernel's packed arrays (pneumaquad.layout)."""
+
+    params: np.ndarray  # (N, N_PARAMETERS)
+    state: np.ndarray  # (N, N_STATES)
+    supply: np.ndarray  # (N_SUPPLY,), shared
+    outputs: np.ndarray  # (N, N_OUTPUTS)
+
+
+class Controllers(NamedTuple):
+    """Per joint: PID gains and memory, settings (JOINT_CONTROL_DTYPE) and references."""
+
+    gains: np.ndarray  # (N, N_GAINS), pneumaquad.control.pid
+    gain_scale: np.ndarray  # factor on Kp, Ki, Kd [-]
+    settings: np.ndarray  # JOINT_CONTROL_DTYPE
+    pid_state: np.ndarray  # (N, N_CONTROLLER_STATES)
+    force_reference: np.ndarray  # force mean or set-point [N]
+    reference_angles: np.ndarray  # [rad]
+    open_loop_voltage: np.ndarray  # [V]
+
+
+class StepTrace(NamedTuple):
+    """What the last control step used, per cylinder (for recording)."""
+
+    commands: np.ndarray  # valve voltages held over the step [V]
+    positions: np.ndarray  # piston positions [m]
+    velocities: np.ndarray  # piston velocities [m/s]
+    reference_positions: np.ndarray  # piston references [m]
+
+
+class StepSettings(NamedTuple):
+    """Scalars of the control step."""
+
+    control_step: float  # [s]
+    substeps: int  # Heun substeps of the pneumatic kernel per control step
+    mujoco_friction: bool  # seal friction as MuJoCo dry friction (else the actuator's law)
 
 
 @compiled
-def piston_from_angle(linkage_row, angle: float) -> float:
-    """Piston extension x [m] for joint angle θ [rad] (eq 5.2.1, 5.2.3, 5.2.5)."""
-    l1 = linkage_row[L_CHILD]
-    l3 = linkage_row[L_PARENT]
-    gamma = linkage_row[L_GAMMA_ZERO] + linkage_row[L_DIRECTION] * angle
-    return math.sqrt(l1 * l1 + l3 * l3 - 2.0 * l1 * l3 * math.cos(gamma)) - linkage_row[L_RETRACTED]
+def piston_from_angle(linkage, angle: float) -> float:
+    """Piston extension x [m] of a linkage record at joint angle θ [rad] (eq 5.2.1,
+    5.2.3, 5.2.5)."""
+    l1 = linkage.child_pivot_radius
+    l3 = linkage.parent_pivot_radius
+    gamma = linkage.included_angle_at_zero + linkage.direction * angle
+    return math.sqrt(l1 * l1 + l3 * l3 - 2.0 * l1 * l3 * math.cos(gamma)) \
+        - linkage.retracted_length
 
 
 @compiled
-def set_seal_friction(seal, tendon_ids, tendon_velocity, tendon_frictionloss, tendon_damping,
-                      index: int) -> None:
+def set_seal_friction(mujoco: MujocoBuffers, seal, index: int) -> None:
     """Seal friction of cylinder ``index`` as the tendon's dry friction in MuJoCo: the
     Stribeck breakaway force at the current piston speed (eq 4.2.6) as ``frictionloss``
     [N], the viscous coefficient as ``damping`` [N s/m]."""
-    tendon = tendon_ids[index]
+    tendon = mujoco.tendon_ids[index]
     row = seal[index]
-    tendon_frictionloss[tendon] = stribeck_curve(
-        tendon_velocity[tendon], row[F_STATIC], row[F_COULOMB], row[F_STRIBECK_VELOCITY],
-        row[F_EXPONENT],
+    mujoco.tendon_frictionloss[tendon] = stribeck_curve(
+        mujoco.tendon_velocity[tendon], row.static_force, row.coulomb_force,
+        row.stribeck_velocity, row.stribeck_exponent,
     )
-    tendon_damping[tendon] = row[F_VISCOUS]
+    mujoco.tendon_damping[tendon] = row.viscous_coefficient
 
 
 @compiled
-def sample_actuators(
-    tendon_length,
-    tendon_velocity,
-    tendon_ids,
-    linkage,
-    params,
-    state,
-    supply,
-    outputs,
-    commands,
-    positions,
-    velocities,
-    coupling,
-    control_step: float,
-    substeps: int,
-) -> int:
+def sample_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: ActuatorArrays,
+                     trace: StepTrace, coupling, settings: StepSettings) -> int:
     """Read the pistons from the present kinematics and bring the chambers up to date.
 
-    ``positions`` [m] (clipped to the stroke) and ``velocities`` [m/s] are filled from
-    the tendons. Where ``coupling[K_PENDING]`` is set, the chambers advance over the last
-    ``control_step`` [s] with the valve ``commands`` [V] held, the piston moving linearly
-    from its previous sample (``state[:, S_POSITION]``) to the present one; else only the
-    force and temperatures of the present state are filled. ``outputs`` then holds the
-    pneumatic force and chamber temperatures of the present instant and the mean flows
-    of the last interval.
+    ``trace.positions`` [m] (clipped to the stroke) and ``trace.velocities`` [m/s] are
+    filled from the tendons. Where ``coupling[0].pending`` is set, the chambers advance
+    over the last control step with the valve commands held, the piston moving linearly
+    from its previous sample (``state[:, S_POSITION]``) to the present one; else only
+    the force and temperatures of the present state are filled. ``actuators.outputs``
+    then holds the pneumatic force and chamber temperatures of the present instant and
+    the mean flows of the last interval.
 
     Returns
     -------
@@ -146,18 +195,21 @@ def sample_actuators(
         -1 when every actuator state is finite, else the index of the first cylinder
         whose piston or chambers are not.
     """
+    params, state, outputs = actuators.params, actuators.state, actuators.outputs
+    positions, velocities = trace.positions, trace.velocities
     count = params.shape[0]
     for i in range(count):
-        tendon = tendon_ids[i]
-        x = tendon_length[tendon] - linkage[i, L_RETRACTED]
+        tendon = mujoco.tendon_ids[i]
+        x = mujoco.tendon_length[tendon] - cylinders.linkage[i].retracted_length
         positions[i] = min(max(x, 0.0), params[i, P_STROKE])
-        velocities[i] = tendon_velocity[tendon]
-    if coupling[K_PENDING] != 0:
+        velocities[i] = mujoco.tendon_velocity[tendon]
+    dt = settings.control_step
+    if coupling[0].pending != 0:
         for i in range(count):
-            state[i, S_VELOCITY] = (positions[i] - state[i, S_POSITION]) / control_step
-        step_actuators(params, state, commands, state[:, S_POSITION], state[:, S_VELOCITY],
-                       control_step, substeps, supply, outputs)
-        coupling[K_PENDING] = 0
+            state[i, S_VELOCITY] = (positions[i] - state[i, S_POSITION]) / dt
+        step_actuators(params, state, trace.commands, state[:, S_POSITION],
+                       state[:, S_VELOCITY], dt, settings.substeps, actuators.supply, outputs)
+        coupling[0].pending = 0
     else:
         for i in range(count):
             state_outputs(params[i], state[i], positions[i], outputs[i])
@@ -175,155 +227,104 @@ def sample_actuators(
 
 
 @compiled
-def control_actuators(
-    tendon_velocity,
-    tendon_ids,
-    actuator_ids,
-    control,
-    tendon_frictionloss,
-    tendon_damping,
-    linkage,
-    seal,
-    mujoco_friction: bool,
-    params,
-    state,
-    outputs,
-    gains,
-    gain_scale,
-    extra,
-    pid_state,
-    force_reference,
-    reference_angles,
-    open_loop_voltage,
-    commands,
-    positions,
-    velocities,
-    reference_positions,
-    control_step: float,
-) -> None:
+def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: ActuatorArrays,
+                      controllers: Controllers, trace: StepTrace,
+                      settings: StepSettings) -> None:
     """Controllers and cylinder forces for the interval that starts now.
 
-    Arrays are per cylinder (index i) unless noted; MuJoCo arrays are indexed through
-    ``tendon_ids`` / ``actuator_ids``. Reads the present ``positions``, ``velocities``
-    and ``outputs`` of :func:`sample_actuators`; fills ``commands`` [V] (held until the
-    next sample) and ``reference_positions`` [m]. ``gain_scale`` multiplies the PID gains
-    (the gain-scheduling hook writes it). With ``mujoco_friction`` the seal friction
-    becomes the tendon's dry friction (the Stribeck breakaway at the present speed, used
-    from MuJoCo's next constraint build on) and viscous damping; otherwise the actuator
-    file's force law is applied through the motor, its slope as tendon damping so
-    MuJoCo's implicit integrator treats it stably (the damping force MuJoCo already
-    computed for this step with the previous slope is added back to the motor force, so
-    the explicit force is exactly the friction law's).
+    Reads the present ``trace.positions``, ``trace.velocities`` and ``actuators.outputs``
+    of :func:`sample_actuators`; fills ``trace.commands`` [V] (held until the next sample)
+    and ``trace.reference_positions`` [m]. ``controllers.gain_scale`` multiplies the PID
+    gains (the gain-scheduling hook writes it). With ``settings.mujoco_friction`` the
+    seal friction becomes the tendon's dry friction (the Stribeck breakaway at the
+    present speed, used from MuJoCo's next constraint build on) and viscous damping;
+    otherwise the actuator file's force law is applied through the motor, its slope as
+    tendon damping so MuJoCo's implicit integrator treats it stably (the damping force
+    MuJoCo already computed for this step with the previous slope is added back to the
+    motor force, so the explicit force is exactly the friction law's).
 
-    ``force_reference`` [N] is per cylinder either the low-pass mean of its pneumatic
-    force (pressure feedback: ``voltage -= X_FORCE_GAIN · (F − mean)``, a damping term)
-    or, where ``extra[i, X_FORCE_TRACKING]`` = k_F > 0, a force set-point written by the
-    caller: ``voltage += k_F · (F_set − F)``, with the PID's integral off and its Kp and
-    Kd multiplied by ``extra[i, X_FORCE_STIFFNESS]`` = s, so that the cylinder pushes
-    with F_set plus a position spring of stiffness s·Kp / k_F [N/m] and a damper of
+    ``controllers.force_reference`` [N] is per cylinder either the low-pass mean of its
+    pneumatic force (pressure feedback: ``voltage -= force_feedback_gain · (F − mean)``, a
+    damping term) or, where ``force_tracking_gain`` = k_F > 0, a force set-point written
+    by the caller: ``voltage += k_F · (F_set − F)``, with the PID's integral off and its
+    Kp and Kd multiplied by ``force_stiffness`` = s, so that the cylinder pushes with
+    F_set plus a position spring of stiffness s·Kp / k_F [N/m] and a damper of
     s·Kd / k_F [N s/m] (a compliant, force-controlled stance; the integral would
     otherwise pull the piston back to its reference whatever the load).
     """
+    params, state, outputs = actuators.params, actuators.state, actuators.outputs
+    positions, velocities = trace.positions, trace.velocities
+    commands, reference_positions = trace.commands, trace.reference_positions
+    control_settings = controllers.settings
+    dt = settings.control_step
     count = params.shape[0]
     scaled = np.empty(N_GAINS)
     for i in range(count):
         stroke = params[i, P_STROKE]
-        mode = extra[i, X_COMMANDED]
-        if mode == MODE_CLOSED_LOOP:
-            target = piston_from_angle(linkage[i], reference_angles[i])
+        joint = control_settings[i]
+        if joint.mode == MODE_CLOSED_LOOP:
+            target = piston_from_angle(cylinders.linkage[i], controllers.reference_angles[i])
             reference_positions[i] = min(max(target, 0.0), stroke)
             for k in range(N_GAINS):
-                scaled[k] = gains[i, k]
-            scaled[G_KP] *= gain_scale[i]
-            scaled[G_KI] *= gain_scale[i]
-            scaled[G_KD] *= gain_scale[i]
-            tracking = extra[i, X_FORCE_TRACKING]
+                scaled[k] = controllers.gains[i, k]
+            scale = controllers.gain_scale[i]
+            scaled[G_KP] *= scale
+            scaled[G_KI] *= scale
+            scaled[G_KD] *= scale
+            tracking = joint.force_tracking_gain
             if tracking > 0.0:
-                scaled[G_KP] *= extra[i, X_FORCE_STIFFNESS]
-                scaled[G_KD] *= extra[i, X_FORCE_STIFFNESS]
+                scaled[G_KP] *= joint.force_stiffness
+                scaled[G_KD] *= joint.force_stiffness
                 scaled[G_KI] = 0.0
             if scaled[G_KI] == 0.0:
-                pid_state[i, C_INTEGRAL] = 0.0
+                controllers.pid_state[i, C_INTEGRAL] = 0.0
             voltage = pid_update(
-                scaled, pid_state[i], reference_positions[i], positions[i], control_step
+                scaled, controllers.pid_state[i], reference_positions[i], positions[i], dt
             )
             # one force term for both uses of force_reference: the set-point (tracking)
             # or the low-pass mean (pressure feedback)
-            force_gain = tracking if tracking > 0.0 else extra[i, X_FORCE_GAIN]
+            force_gain = tracking if tracking > 0.0 else joint.force_feedback_gain
             if force_gain > 0.0:
-                voltage += force_gain * (force_reference[i] - outputs[i, O_PNEUMATIC_FORCE])
+                voltage += force_gain * (controllers.force_reference[i]
+                                         - outputs[i, O_PNEUMATIC_FORCE])
                 voltage = min(max(voltage, scaled[G_UMIN]), scaled[G_UMAX])
             commands[i] = voltage
-        elif mode == MODE_OPEN_LOOP:
+        elif joint.mode == MODE_OPEN_LOOP:
             reference_positions[i] = positions[i]
-            commands[i] = open_loop_voltage[i]
+            commands[i] = controllers.open_loop_voltage[i]
         else:
             reference_positions[i] = positions[i]
             commands[i] = params[i, P_OFFSET]
     for i in range(count):
-        tendon = tendon_ids[i]
+        tendon = mujoco.tendon_ids[i]
         force = outputs[i, O_PNEUMATIC_FORCE]
-        tau = extra[i, X_FORCE_TAU]
-        if extra[i, X_FORCE_TRACKING] == 0.0:
-            force_reference[i] += control_step / (tau + control_step) * (force - force_reference[i])
+        joint = control_settings[i]
+        if joint.force_tracking_gain == 0.0:
+            tau = joint.force_feedback_time_constant
+            controllers.force_reference[i] += dt / (tau + dt) * (
+                force - controllers.force_reference[i])
         v = velocities[i]
-        if mujoco_friction:
-            set_seal_friction(seal, tendon_ids, tendon_velocity, tendon_frictionloss,
-                              tendon_damping, i)
+        if settings.mujoco_friction:
+            set_seal_friction(mujoco, cylinders.seal, i)
         else:
-            applied_damping = tendon_damping[tendon]  # in MuJoCo's passive force already
+            applied_damping = mujoco.tendon_damping[tendon]  # in MuJoCo's passive force
             force += applied_damping * v - friction_of(params[i], v, state[i, S_BRISTLE])
-            tendon_damping[tendon] = max(friction_slope_of(params[i], v, state[i, S_BRISTLE]),
-                                         0.0)
-        control[actuator_ids[i]] = force
+            mujoco.tendon_damping[tendon] = max(
+                friction_slope_of(params[i], v, state[i, S_BRISTLE]), 0.0)
+        mujoco.control[mujoco.actuator_ids[i]] = force
 
 
 @compiled
-def robot_control_step(
-    tendon_length,
-    tendon_velocity,
-    tendon_ids,
-    actuator_ids,
-    control,
-    tendon_frictionloss,
-    tendon_damping,
-    linkage,
-    seal,
-    mujoco_friction: bool,
-    params,
-    state,
-    supply,
-    outputs,
-    gains,
-    gain_scale,
-    extra,
-    pid_state,
-    force_reference,
-    reference_angles,
-    open_loop_voltage,
-    commands,
-    positions,
-    velocities,
-    reference_positions,
-    coupling,
-    control_step: float,
-    substeps: int,
-) -> int:
+def robot_control_step(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: ActuatorArrays,
+                       controllers: Controllers, trace: StepTrace, coupling,
+                       settings: StepSettings) -> int:
     """One control step at the present kinematics: :func:`sample_actuators`, then
     :func:`control_actuators`; marks the chambers as owing the interval that follows.
 
     Returns the index of a cylinder whose state went non-finite, else -1 (see
     :func:`sample_actuators`).
     """
-    bad = sample_actuators(
-        tendon_length, tendon_velocity, tendon_ids, linkage, params, state, supply, outputs,
-        commands, positions, velocities, coupling, control_step, substeps,
-    )
-    control_actuators(
-        tendon_velocity, tendon_ids, actuator_ids, control, tendon_frictionloss,
-        tendon_damping, linkage, seal, mujoco_friction, params, state, outputs, gains,
-        gain_scale, extra, pid_state, force_reference, reference_angles, open_loop_voltage,
-        commands, positions, velocities, reference_positions, control_step,
-    )
-    coupling[K_PENDING] = 1
+    bad = sample_actuators(mujoco, cylinders, actuators, trace, coupling, settings)
+    control_actuators(mujoco, cylinders, actuators, controllers, trace, settings)
+    coupling[0].pending = 1
     return bad

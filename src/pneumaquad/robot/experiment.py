@@ -31,7 +31,7 @@ from pneumaquad.layout import P_R, P_TS
 from pneumaquad.params import resolved_parameters_toml
 from pneumaquad.recording import RunRecorder, write_summary
 
-from .coupling import MODE_CLOSED_LOOP, MODE_OPEN_LOOP, MODE_UNCOMMANDED, X_COMMANDED
+from .coupling import MODE_CLOSED_LOOP, MODE_OPEN_LOOP, MODE_UNCOMMANDED
 from .recording import recording_columns, recording_row
 from .simulation import RobotSimulation, SimulationDivergedError
 
@@ -155,7 +155,7 @@ def run_phases(
                 steps = round(phase.duration / dt)
                 if not phase.feedback:
                     table = _reference_table(phase, simulation.time, steps, dt, count)
-                simulation.extra[:, X_COMMANDED] = modes
+                simulation.joint_control["mode"] = modes
                 simulation.stop_force_tracking()  # a feedback phase may track forces
                 if voltages is not None:
                     simulation.open_loop_voltage[:] = np.where(

@@ -25,7 +25,6 @@ from pneumaquad.layout import (
 )
 from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
 
-from .coupling import X_COMMANDED, X_FORCE_TRACKING
 from .simulation import RobotSimulation
 
 __all__ = ["JOINT_QUANTITIES", "recording_columns", "recording_row", "thorax_attitude"]
@@ -102,8 +101,8 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
             s.state[:, S_ROD_PRESSURE],
             s.outputs[:, O_PNEUMATIC_FORCE],
             s.state[:, S_AIR_CONSUMED],
-            s.extra[:, X_COMMANDED],
-            np.where(s.extra[:, X_FORCE_TRACKING] > 0.0, s.force_reference, np.nan),
+            s.joint_control["mode"],
+            np.where(s.joint_control["force_tracking_gain"] > 0.0, s.force_reference, np.nan),
         ]
     ).ravel()
     thorax = np.concatenate([s.data.xpos[robot.thorax_id], thorax_attitude(s)])

@@ -41,30 +41,19 @@ from pneumaquad.params import ActuatorParameters
 
 from .builder import RobotModel
 from .coupling import (
-    F_COULOMB,
-    F_EXPONENT,
-    F_STATIC,
-    F_STRIBECK_VELOCITY,
-    F_VISCOUS,
-    K_FRESH,
-    K_PENDING,
-    L_CHILD,
-    L_DIRECTION,
-    L_GAMMA_ZERO,
-    L_PARENT,
-    L_RETRACTED,
+    COUPLING_DTYPE,
+    JOINT_CONTROL_DTYPE,
+    LINKAGE_DTYPE,
     MODE_CLOSED_LOOP,
     MODE_OPEN_LOOP,
     MODE_UNCOMMANDED,
-    N_COUPLING,
-    N_EXTRA,
-    N_LINKAGE,
-    N_SEAL,
-    X_COMMANDED,
-    X_FORCE_GAIN,
-    X_FORCE_STIFFNESS,
-    X_FORCE_TAU,
-    X_FORCE_TRACKING,
+    SEAL_DTYPE,
+    ActuatorArrays,
+    Controllers,
+    Cylinders,
+    MujocoBuffers,
+    StepSettings,
+    StepTrace,
     set_seal_friction,
 )
 from .errors import SimulationDivergedError
@@ -74,6 +63,7 @@ from .stepping import (
     MJ_STEP_ADDRESS,
     STATUS_ACTUATOR,
     STATUS_MUJOCO,
+    MujocoStepper,
     advance_chunk,
 )
 
@@ -100,29 +90,27 @@ def _step_addresses(model: mujoco.MjModel) -> np.ndarray:
 
 
 def seal_friction_row(actuator: ActuatorParameters) -> np.ndarray:
-    """Seal friction for MuJoCo's dry-friction constraint: Fs, Fc [N], vS [m/s], i, b [N s/m].
+    """Seal friction for MuJoCo's dry-friction constraint, a :data:`SEAL_DTYPE` record:
+    Fs, Fc [N], vS [m/s], i, viscous coefficient [N s/m].
 
     The Stribeck-tanh and LuGre models give their Stribeck curve (eq 4.2.6) as the
     breakaway force and Cv as viscous damping; Coulomb(-viscous) give Fc (Fs from rest);
     the viscous model gives damping only (thesis 4.2.2).
     """
     f = actuator.friction
-    row = np.zeros(N_SEAL)
-    row[F_STRIBECK_VELOCITY] = f.stribeck_velocity
-    row[F_EXPONENT] = f.stribeck_exponent
-    if f.model in ("stribeck_tanh", "lugre"):
-        row[F_STATIC], row[F_COULOMB], row[F_VISCOUS] = (
-            f.static_force, f.coulomb_force, f.viscous_coefficient,
-        )
+    row = np.zeros((), SEAL_DTYPE)
+    row["stribeck_velocity"] = f.stribeck_velocity
+    row["stribeck_exponent"] = f.stribeck_exponent
+    if f.model in ("stribeck_tanh", "lugre", "coulomb_viscous"):
+        row["static_force"] = f.static_force
+        row["coulomb_force"] = f.coulomb_force
+        row["viscous_coefficient"] = f.viscous_coefficient
+        if f.model == "coulomb_viscous":
+            row["stribeck_velocity"] = 1e-4
     elif f.model == "coulomb":
-        row[F_STATIC] = row[F_COULOMB] = f.coulomb_force
-    elif f.model == "coulomb_viscous":
-        row[F_STATIC], row[F_COULOMB], row[F_VISCOUS] = (
-            f.static_force, f.coulomb_force, f.viscous_coefficient,
-        )
-        row[F_STRIBECK_VELOCITY] = 1e-4
+        row["static_force"] = row["coulomb_force"] = f.coulomb_force
     else:
-        row[F_VISCOUS] = f.damping_coefficient
+        row["viscous_coefficient"] = f.damping_coefficient
     return row
 
 
@@ -199,25 +187,23 @@ class RobotSimulation:
         self.supply = supply_state(first)
         self._initial_supply = self.supply.copy()
         self.outputs = np.zeros((n, N_OUTPUTS))
-        self.linkage = np.zeros((n, N_LINKAGE))
+        self.linkage = np.zeros(n, LINKAGE_DTYPE)
         for i, joint_type in enumerate(robot.joint_types):
             link = robot.linkages[joint_type]
-            self.linkage[i, L_CHILD] = link.child_pivot_radius
-            self.linkage[i, L_PARENT] = link.parent_pivot_radius
-            self.linkage[i, L_GAMMA_ZERO] = link.included_angle_at_zero
-            self.linkage[i, L_RETRACTED] = link.retracted_length
-            self.linkage[i, L_DIRECTION] = link.direction
-        self.seal = np.array([seal_friction_row(a) for a in actuators])
+            for field in LINKAGE_DTYPE.names:
+                self.linkage[i][field] = getattr(link, field)
+        self.seal = np.array([seal_friction_row(a) for a in actuators], dtype=SEAL_DTYPE)
         controllers = [getattr(p.controller, t) for t in robot.joint_types]
         self.gains = np.array(
             [controller_gains(c, a.valve) for c, a in zip(controllers, actuators, strict=True)]
         )
         self.base_gain_scale = np.array([c.gain_scale for c in controllers])
         self.gain_scale = self.base_gain_scale.copy()
-        self.extra = np.zeros((n, N_EXTRA))
-        self.extra[:, X_FORCE_GAIN] = [c.force_feedback_gain for c in controllers]
-        self.extra[:, X_FORCE_TAU] = [c.force_feedback_time_constant for c in controllers]
-        self.extra[:, X_COMMANDED] = MODE_UNCOMMANDED
+        self.joint_control = np.zeros(n, JOINT_CONTROL_DTYPE)
+        self.joint_control["force_feedback_gain"] = [c.force_feedback_gain for c in controllers]
+        self.joint_control["force_feedback_time_constant"] = [
+            c.force_feedback_time_constant for c in controllers]
+        self.joint_control["mode"] = MODE_UNCOMMANDED
         self.pid_state = np.zeros((n, N_CONTROLLER_STATES))
         self.force_reference = np.zeros(n)
         self.reference_angles = np.zeros(n)
@@ -227,8 +213,31 @@ class RobotSimulation:
         self.velocities = np.zeros(n)
         self.reference_positions = np.zeros(n)
         self.state = np.zeros((n, N_STATES))
-        self.coupling = np.zeros(N_COUPLING, dtype=np.int64)
-        self._step_addresses = _step_addresses(robot.model)
+        self.coupling = np.zeros(1, COUPLING_DTYPE)
+        d = self.data
+        # Named views of the arrays above for the compiled step (the same memory).
+        self.mujoco = MujocoBuffers(
+            tendon_length=d.ten_length, tendon_velocity=d.ten_velocity, control=d.ctrl,
+            tendon_frictionloss=self.model.tendon_frictionloss,
+            tendon_damping=self.model.tendon_damping, tendon_ids=robot.tendon_id,
+            actuator_ids=robot.actuator_id)
+        self.cylinders = Cylinders(linkage=self.linkage, seal=self.seal)
+        self.actuators = ActuatorArrays(params=self.params, state=self.state,
+                                        supply=self.supply, outputs=self.outputs)
+        self.controllers = Controllers(
+            gains=self.gains, gain_scale=self.gain_scale, settings=self.joint_control,
+            pid_state=self.pid_state, force_reference=self.force_reference,
+            reference_angles=self.reference_angles, open_loop_voltage=self.open_loop_voltage)
+        self.trace = StepTrace(commands=self.commands, positions=self.positions,
+                               velocities=self.velocities,
+                               reference_positions=self.reference_positions)
+        self.step_settings = StepSettings(control_step=float(self.control_step),
+                                          substeps=int(self.substeps),
+                                          mujoco_friction=bool(self.mujoco_friction))
+        self.stepper = MujocoStepper(
+            step_addresses=_step_addresses(robot.model), model_address=self.model._address,
+            data_address=d._address, warning_counts=d.warning.number,
+            physics_steps=int(self.physics_steps))
         self.gain_schedule: GainSchedule | None = None
         self._tibia_leg = {
             mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
@@ -323,22 +332,21 @@ class RobotSimulation:
         lengths = self.data.ten_length[robot.tendon_id]
         for i in range(robot.joint_count):
             row = self.params[i]
-            position = min(max(lengths[i] - self.linkage[i, L_RETRACTED], 0.0), row[P_STROKE])
+            retracted = self.linkage[i]['retracted_length']
+            position = min(max(lengths[i] - retracted, 0.0), row[P_STROKE])
             pressure = chamber_pressure
             if pressure is None:
                 pressure = 0.5 * (row[P_PS] + row[P_PE])
             self.state[i] = initial_state(row, position, pressure, pressure)
         self.pid_state[:] = 0.0
         self.outputs[:] = 0.0
-        self.coupling[K_PENDING] = 0  # the chambers start at the present instant
-        self.coupling[K_FRESH] = 1  # mj_forward above
+        self.coupling["pending"] = 0  # the chambers start at the present instant
+        self.coupling["fresh"] = 1  # mj_forward above
         if self.mujoco_friction:  # the breakaway level at rest for the first step
             for index in range(robot.joint_count):
-                set_seal_friction(self.seal, robot.tendon_id, self.data.ten_velocity,
-                                  self.model.tendon_frictionloss, self.model.tendon_damping,
-                                  index)
+                set_seal_friction(self.mujoco, self.seal, index)
         self.force_reference[:] = 0.0
-        self.extra[:, X_FORCE_TRACKING] = 0.0
+        self.joint_control["force_tracking_gain"] = 0.0
         self.reference_angles[:] = angles
         self.step(0)  # piston readouts and forces of the new pose (compiles on first use)
 
@@ -347,18 +355,18 @@ class RobotSimulation:
         """Closed-loop position control of ``joints`` (all by default) to ``angles`` [rad]."""
         index = slice(None) if joints is None else joints
         self.reference_angles[index] = angles
-        self.extra[index, X_COMMANDED] = MODE_CLOSED_LOOP
+        self.joint_control["mode"][index] = MODE_CLOSED_LOOP
 
     def command_voltages(self, voltages: np.ndarray, joints: np.ndarray | None = None) -> None:
         """Open-loop valve voltages [V] for ``joints`` (all by default)."""
         index = slice(None) if joints is None else joints
         self.open_loop_voltage[index] = voltages
-        self.extra[index, X_COMMANDED] = MODE_OPEN_LOOP
+        self.joint_control["mode"][index] = MODE_OPEN_LOOP
 
     def release(self, joints: np.ndarray | None = None) -> None:
         """Hold the valves of ``joints`` at their offset (closed centre), uncommanded."""
         index = slice(None) if joints is None else joints
-        self.extra[index, X_COMMANDED] = MODE_UNCOMMANDED
+        self.joint_control["mode"][index] = MODE_UNCOMMANDED
 
     def track_forces(self, forces: np.ndarray, gain: float | np.ndarray,
                      joints: np.ndarray | None = None, stiffness: float = 1.0) -> None:
@@ -372,15 +380,15 @@ class RobotSimulation:
         """
         index = slice(None) if joints is None else joints
         gains = np.broadcast_to(np.asarray(gain, dtype=float),
-                                self.extra[index, X_FORCE_TRACKING].shape)
+                                self.joint_control["force_tracking_gain"][index].shape)
         if np.any(gains < 0.0) or not np.all(np.isfinite(gains)):
             raise ValueError(f"force tracking gain must be finite and >= 0, got {gain!r}")
         if not (math.isfinite(stiffness) and stiffness > 0.0):
             raise ValueError(f"stance stiffness factor must be finite and > 0, got "
                              f"{stiffness!r}")
         self.force_reference[index] = forces
-        self.extra[index, X_FORCE_TRACKING] = gains
-        self.extra[index, X_FORCE_STIFFNESS] = stiffness
+        self.joint_control["force_tracking_gain"][index] = gains
+        self.joint_control["force_stiffness"][index] = stiffness
 
     def stop_force_tracking(self, joints: np.ndarray | None = None) -> None:
         """Plain position control (integral back on) for ``joints`` (all by default).
@@ -389,17 +397,17 @@ class RobotSimulation:
         (the low-pass mean that pressure feedback, if configured, works about)."""
         selected = np.zeros(self.robot.joint_count, dtype=bool)
         selected[slice(None) if joints is None else joints] = True
-        tracking = selected & (self.extra[:, X_FORCE_TRACKING] > 0.0)
-        self.extra[tracking, X_FORCE_TRACKING] = 0.0
+        tracking = selected & (self.joint_control["force_tracking_gain"] > 0.0)
+        self.joint_control["force_tracking_gain"][tracking] = 0.0
         self.force_reference[tracking] = self.outputs[tracking, O_PNEUMATIC_FORCE]
 
     def force_tracking_gains(self) -> np.ndarray:
         """Per joint: force tracking gain [V/N] (0: plain position control)."""
-        return self.extra[:, X_FORCE_TRACKING].copy()
+        return self.joint_control["force_tracking_gain"].copy()
 
     def control_modes(self) -> np.ndarray:
         """Per joint: 0 uncommanded, 1 closed loop, 2 open loop."""
-        return self.extra[:, X_COMMANDED].copy()
+        return self.joint_control["mode"].copy()
 
     # --- stepping --------------------------------------------------------------------
     def step(self, count: int = 1, reference_table: np.ndarray | None = None,
@@ -422,15 +430,8 @@ class RobotSimulation:
         d = self.data
         start = self.time
         done, status, cylinder = advance_chunk(
-            self._step_addresses, count, self.model._address, d._address, self.physics_steps,
-            d.warning.number, table, reference_start,
-            d.ten_length, d.ten_velocity, self.robot.tendon_id, self.robot.actuator_id, d.ctrl,
-            self.model.tendon_frictionloss, self.model.tendon_damping, self.linkage, self.seal,
-            self.mujoco_friction, self.params, self.state, self.supply, self.outputs,
-            self.gains, self.gain_scale, self.extra, self.pid_state, self.force_reference,
-            self.reference_angles, self.open_loop_voltage, self.commands, self.positions,
-            self.velocities, self.reference_positions, self.coupling, self.control_step,
-            self.substeps,
+            self.stepper, count, table, reference_start, self.mujoco, self.cylinders,
+            self.actuators, self.controllers, self.trace, self.coupling, self.step_settings,
         )
         self.steps_taken += done
         if status == STATUS_MUJOCO:
@@ -455,7 +456,7 @@ class RobotSimulation:
     # --- snapshots -------------------------------------------------------------------
     _SNAPSHOT_ARRAYS = ("state", "supply", "outputs", "pid_state", "force_reference",
                         "coupling", "commands", "positions", "velocities",
-                        "reference_positions", "reference_angles", "extra",
+                        "reference_positions", "reference_angles", "joint_control",
                         "open_loop_voltage", "gain_scale")
 
     def snapshot(self, into: dict[str, object] | None = None) -> dict[str, object]:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import ctypes
 import glob
 import os
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -29,7 +30,16 @@ from numba.extending import intrinsic
 
 from pneumaquad.jit import compiled
 
-from .coupling import K_FRESH, robot_control_step, sample_actuators
+from .coupling import (
+    ActuatorArrays,
+    Controllers,
+    Cylinders,
+    MujocoBuffers,
+    StepSettings,
+    StepTrace,
+    robot_control_step,
+    sample_actuators,
+)
 
 __all__ = [
     "MJ_STEP1_ADDRESS",
@@ -39,6 +49,7 @@ __all__ = [
     "STATUS_MUJOCO",
     "STATUS_OK",
     "UNSTABLE_WARNINGS",
+    "MujocoStepper",
     "advance_chunk",
     "mujoco_step_function",
 ]
@@ -102,53 +113,27 @@ def _unstable(warning_counts, baseline) -> bool:
     return False
 
 
+class MujocoStepper(NamedTuple):
+    """How the compiled loop calls MuJoCo for one simulation."""
+
+    step_addresses: np.ndarray  # mj_step1, the second half (mj_step2 or mj_step), mj_step
+    model_address: int  # mjModel*
+    data_address: int  # mjData*
+    warning_counts: np.ndarray  # data.warning.number
+    physics_steps: int  # MuJoCo steps per control step
+
+
 @compiled
-def advance_chunk(
-    step_addresses,
-    step_count: int,
-    model_address: int,
-    data_address: int,
-    physics_steps: int,
-    warning_counts,
-    reference_table,
-    reference_start: int,
-    tendon_length,
-    tendon_velocity,
-    tendon_ids,
-    actuator_ids,
-    control,
-    tendon_frictionloss,
-    tendon_damping,
-    linkage,
-    seal,
-    mujoco_friction: bool,
-    params,
-    state,
-    supply,
-    outputs,
-    gains,
-    gain_scale,
-    extra,
-    pid_state,
-    force_reference,
-    reference_angles,
-    open_loop_voltage,
-    commands,
-    positions,
-    velocities,
-    reference_positions,
-    coupling,
-    control_step: float,
-    substeps: int,
-):
+def advance_chunk(stepper: MujocoStepper, step_count: int, reference_table,
+                  reference_start: int, mujoco: MujocoBuffers, cylinders: Cylinders,
+                  actuators: ActuatorArrays, controllers: Controllers, trace: StepTrace,
+                  coupling, settings: StepSettings):
     """Run ``step_count`` control steps, then bring MuJoCo and the actuators to the end.
 
-    ``step_addresses`` holds the addresses of ``mj_step1``, ``mj_step2`` and ``mj_step``.
     Row ``reference_start + k`` of ``reference_table`` (clamped to its last row) is the
-    joint-angle reference of step k; an empty table keeps ``reference_angles`` as set.
-    ``warning_counts`` is MuJoCo's ``data.warning.number``; a new unstable-state warning
-    (MuJoCo's automatic reset must be disabled) or a non-finite actuator state stops the
-    chunk.
+    joint-angle reference of step k; an empty table keeps the references as set. A new
+    MuJoCo unstable-state warning (its automatic reset must be disabled) or a non-finite
+    actuator state stops the chunk.
 
     Returns
     -------
@@ -156,42 +141,38 @@ def advance_chunk(
         Control steps completed, status (``STATUS_OK``, ``STATUS_MUJOCO`` or
         ``STATUS_ACTUATOR``) and the cylinder index of an actuator failure (else -1).
     """
-    step1, step2, full_step = step_addresses[0], step_addresses[1], step_addresses[2]
+    addresses = stepper.step_addresses
+    step1, step2, full_step = addresses[0], addresses[1], addresses[2]
+    model, data = stepper.model_address, stepper.data_address
+    warning_counts = stepper.warning_counts
     baseline = np.empty(UNSTABLE_WARNINGS.shape[0], dtype=np.int64)
     for k in range(UNSTABLE_WARNINGS.shape[0]):
         baseline[k] = warning_counts[UNSTABLE_WARNINGS[k]]
+    references = controllers.reference_angles
     rows = reference_table.shape[0]
     for k in range(step_count):
         if rows > 0:
             row = min(reference_start + k, rows - 1)
-            for i in range(reference_angles.shape[0]):
-                reference_angles[i] = reference_table[row, i]
-        if coupling[K_FRESH] == 0:
-            _call_step(step1, model_address, data_address)
-        bad = robot_control_step(
-            tendon_length, tendon_velocity, tendon_ids, actuator_ids, control,
-            tendon_frictionloss, tendon_damping, linkage, seal, mujoco_friction, params,
-            state, supply, outputs, gains, gain_scale, extra, pid_state, force_reference,
-            reference_angles, open_loop_voltage, commands, positions, velocities,
-            reference_positions, coupling, control_step, substeps,
-        )
+            for i in range(references.shape[0]):
+                references[i] = reference_table[row, i]
+        if coupling[0].fresh == 0:
+            _call_step(step1, model, data)
+        bad = robot_control_step(mujoco, cylinders, actuators, controllers, trace, coupling,
+                                 settings)
         if bad >= 0:
             return k, STATUS_ACTUATOR, bad
-        _call_step(step2, model_address, data_address)
-        for _ in range(physics_steps - 1):
-            _call_step(full_step, model_address, data_address)
-        coupling[K_FRESH] = 0
+        _call_step(step2, model, data)
+        for _ in range(stepper.physics_steps - 1):
+            _call_step(full_step, model, data)
+        coupling[0].fresh = 0
         if _unstable(warning_counts, baseline):
             return k + 1, STATUS_MUJOCO, -1
-    if coupling[K_FRESH] == 0:
-        _call_step(step1, model_address, data_address)
-        coupling[K_FRESH] = 1
+    if coupling[0].fresh == 0:
+        _call_step(step1, model, data)
+        coupling[0].fresh = 1
     if _unstable(warning_counts, baseline):
         return step_count, STATUS_MUJOCO, -1
-    bad = sample_actuators(
-        tendon_length, tendon_velocity, tendon_ids, linkage, params, state, supply, outputs,
-        commands, positions, velocities, coupling, control_step, substeps,
-    )
+    bad = sample_actuators(mujoco, cylinders, actuators, trace, coupling, settings)
     if bad >= 0:
         return step_count, STATUS_ACTUATOR, bad
     return step_count, STATUS_OK, -1
