@@ -214,3 +214,31 @@ def test_recording_columns_hold_what_their_names_say() -> None:
                                    rtol=0.0, atol=1e-12)
     gamma = recording["front_right_gamma piston position [m]"]
     assert np.ptp(gamma) > 0.005  # the step moved the piston: position and reference differ
+
+
+def test_simulations_of_one_robot_model_do_not_interfere() -> None:
+    """Two simulations built from one RobotModel, stepped in turn, each give the run a
+    simulation of its own gives: the seal friction each writes per step (here the
+    actuator's friction law, whose slope goes into the tendon damping) goes to its own
+    copy of the MuJoCo model."""
+    actuator_friction = 'simulation.seal_friction="actuator"'
+
+    def gamma_step(simulation: RobotSimulation, degrees: float) -> None:
+        simulation.set_pose(POSE)
+        target = POSE.copy()
+        target[5] += np.radians(degrees)
+        simulation.command_angles(target)
+
+    robot = build_robot(load_robot("crr-quadruped", [actuator_friction]), "fixed")
+    first, second = RobotSimulation(robot), RobotSimulation(robot)
+    gamma_step(first, 20.0)
+    gamma_step(second, -15.0)
+    for _ in range(30):
+        first.step(CHUNK)
+        second.step(CHUNK)
+    alone = RobotSimulation(build_robot(load_robot("crr-quadruped", [actuator_friction]),
+                                        "fixed"))
+    gamma_step(alone, 20.0)
+    alone.step(30 * CHUNK)
+    np.testing.assert_array_equal(first.data.qpos, alone.data.qpos)
+    np.testing.assert_array_equal(first.state, alone.state)

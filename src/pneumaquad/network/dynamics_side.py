@@ -79,8 +79,8 @@ class DynamicsSide:
     Parameters
     ----------
     robot
-        From :func:`pneumaquad.robot.builder.build_robot`. Its ``model`` is written to
-        (seal friction per step in force mode, zero friction in torque mode).
+        From :func:`pneumaquad.robot.builder.build_robot`; it is not written to (the
+        simulation steps its own copy of ``robot.model``).
     command_kind
         ``"valve"`` [V], ``"force"`` [N] or ``"torque"`` [N m].
 
@@ -115,7 +115,7 @@ class DynamicsSide:
         self.robot = robot
         self.command_kind = command_kind
         self.simulation = RobotSimulation(robot)  # arrays, pose and, in valve mode, actuators
-        self.model = robot.model
+        self.model = self.simulation.model  # the simulation's own copy of robot.model
         self.data = self.simulation.data
         self.joint_count = robot.joint_count
         self.control_step = self.simulation.control_step

@@ -12,6 +12,7 @@ recording, gain scheduling and progress.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable
 
@@ -170,8 +171,11 @@ class RobotSimulation:
 
     def __init__(self, robot: RobotModel, supply: str | None = None) -> None:
         self.robot = robot
-        self.model = robot.model
-        self.data = mujoco.MjData(robot.model)
+        # The compiled step writes the seal friction into the model every step: each
+        # simulation gets its own copy, so simulations built from one RobotModel (or the
+        # model a renderer reads) never see each other's values.
+        self.model = copy.copy(robot.model)
+        self.data = mujoco.MjData(self.model)
         p = robot.parameters
         n = robot.joint_count
         self.control_step = p.simulation.control_step
@@ -235,7 +239,7 @@ class RobotSimulation:
                                           substeps=int(self.substeps),
                                           mujoco_friction=bool(self.mujoco_friction))
         self.stepper = MujocoStepper(
-            step_addresses=_step_addresses(robot.model), model_address=self.model._address,
+            step_addresses=_step_addresses(self.model), model_address=self.model._address,
             data_address=d._address, warning_counts=d.warning.number,
             physics_steps=int(self.physics_steps))
         self.gain_schedule: GainSchedule | None = None
