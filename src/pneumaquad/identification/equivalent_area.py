@@ -35,7 +35,7 @@ from pneumaquad.params.schema import RigSetup
 from pneumaquad.physics.chamber import chamber_volume_cap, chamber_volume_rod
 from pneumaquad.physics.valve import centered_voltage
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
-from pneumaquad.rig.simulate import N_COLUMNS, RIG_COLUMNS, run_rig_chunk
+from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk
 from pneumaquad.valve_fit import evaluate_equivalent_area
 
 from .preprocess import REQUIRED_COLUMNS, IdentificationError, select_step
@@ -238,7 +238,7 @@ def _simulate_from(
     gas = row[layout.P_R]
     state[0, layout.S_CAP_MASS] = start.cap_pressure * cap_volume / (gas * start.cap_temperature)
     state[0, layout.S_ROD_MASS] = start.rod_pressure * rod_volume / (gas * start.rod_temperature)
-    rows = np.zeros((command.size, N_COLUMNS))
+    records, rows = new_rows(command.size)
     run_rig_chunk(
         params,
         state,
@@ -251,7 +251,7 @@ def _simulate_from(
         command.size,
         grid.step,
         grid.substeps,
-        rows,
+        records,
     )
     return rows
 

@@ -35,7 +35,7 @@ from pneumaquad.control.pid import N_CONTROLLER_STATES
 from pneumaquad.params import RigSetup, load_rig
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 from pneumaquad.rig.signals import sine
-from pneumaquad.rig.simulate import N_COLUMNS, RIG_COLUMNS, run_rig_chunk
+from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk
 
 __all__ = [
     "THESIS_TABLE_3",
@@ -153,7 +153,7 @@ def time_rig_run(
     supply = supply_state(setup.actuator)
     gains = rig_controller_gains(setup)
     controller = np.zeros(N_CONTROLLER_STATES)
-    rows = np.zeros((signal.shape[0], N_COLUMNS))
+    records, rows = new_rows(signal.shape[0])
     sim = setup.simulation
     start = time.perf_counter()
     run_rig_chunk(
@@ -168,7 +168,7 @@ def time_rig_run(
         signal.shape[0],
         sim.control_step,
         sim.substeps,
-        rows,
+        records,
     )
     return time.perf_counter() - start, rows
 

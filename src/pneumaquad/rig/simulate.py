@@ -30,30 +30,34 @@ from pneumaquad.pneumatics import finish_outputs, friction_of, supply_pressure_n
 from pneumaquad.recording import RunRecorder
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 
-RIG_COLUMNS = (
-    "time [s]",
-    "command [V]",
-    "reference position [m]",
-    "position [m]",
-    "velocity [m/s]",
-    "cap pressure [Pa]",
-    "rod pressure [Pa]",
-    "cap temperature [K]",
-    "rod temperature [K]",
-    "cap mass flow [kg/s]",
-    "rod mass flow [kg/s]",
-    "cap mass [kg]",
-    "rod mass [kg]",
-    "friction force [N]",
-    "pneumatic force [N]",
-    "end stop force [N]",
-    "supply pressure [Pa]",
-    "supply mass flow [kg/s]",
-    "air consumed [kg]",
-    "tank pressure [Pa]",
-    "net force [N]",
-    "air consumed [NL]",
+#: The rig recording, defined once: (field of a row record, column header) in column
+#: order. :func:`write_row` fills the fields by name; the headers name the columns.
+RIG_RECORDING = (
+    ("time", "time [s]"),
+    ("command", "command [V]"),
+    ("reference", "reference position [m]"),
+    ("position", "position [m]"),
+    ("velocity", "velocity [m/s]"),
+    ("cap_pressure", "cap pressure [Pa]"),
+    ("rod_pressure", "rod pressure [Pa]"),
+    ("cap_temperature", "cap temperature [K]"),
+    ("rod_temperature", "rod temperature [K]"),
+    ("cap_mass_flow", "cap mass flow [kg/s]"),
+    ("rod_mass_flow", "rod mass flow [kg/s]"),
+    ("cap_mass", "cap mass [kg]"),
+    ("rod_mass", "rod mass [kg]"),
+    ("friction_force", "friction force [N]"),
+    ("pneumatic_force", "pneumatic force [N]"),
+    ("end_stop_force", "end stop force [N]"),
+    ("supply_pressure", "supply pressure [Pa]"),
+    ("supply_mass_flow", "supply mass flow [kg/s]"),
+    ("air_consumed", "air consumed [kg]"),
+    ("tank_pressure", "tank pressure [Pa]"),
+    ("net_force", "net force [N]"),
+    ("air_consumed_normal_litres", "air consumed [NL]"),
 )
+RIG_ROW_DTYPE = np.dtype([(field, "f8") for field, _ in RIG_RECORDING])
+RIG_COLUMNS = tuple(header for _, header in RIG_RECORDING)
 N_COLUMNS = len(RIG_COLUMNS)
 
 #: Normal conditions (DIN 1343) for normal litres: pressure [Pa] and temperature [K].
@@ -84,34 +88,43 @@ _STATE_NAMES = {
 
 
 @compiled
-def write_row(row, sample_time, command, reference, p, s, out, supply):
-    """Fill one recording row (layout of RIG_COLUMNS) from the state after a step."""
-    row[0] = sample_time
-    row[1] = command
-    row[2] = reference
-    row[3] = s[layout.S_POSITION]
-    row[4] = s[layout.S_VELOCITY]
-    row[5] = s[layout.S_CAP_PRESSURE]
-    row[6] = s[layout.S_ROD_PRESSURE]
-    row[7] = out[layout.O_CAP_TEMPERATURE]
-    row[8] = out[layout.O_ROD_TEMPERATURE]
-    row[9] = out[layout.O_CAP_FLOW]
-    row[10] = out[layout.O_ROD_FLOW]
-    row[11] = s[layout.S_CAP_MASS]
-    row[12] = s[layout.S_ROD_MASS]
-    row[13] = out[layout.O_FRICTION_FORCE]
-    row[14] = out[layout.O_PNEUMATIC_FORCE]
-    row[15] = out[layout.O_END_STOP_FORCE]
-    row[16] = supply_pressure_now(p, supply)
-    row[17] = out[layout.O_SUPPLY_DRAW]
-    row[18] = s[layout.S_AIR_CONSUMED]
-    row[19] = (
+def write_row(records, index, sample_time, command, reference, p, s, out, supply):
+    """Fill record ``index`` of ``records`` (:data:`RIG_ROW_DTYPE`) from the state after a
+    step."""
+    row = records[index]
+    row.time = sample_time
+    row.command = command
+    row.reference = reference
+    row.position = s[layout.S_POSITION]
+    row.velocity = s[layout.S_VELOCITY]
+    row.cap_pressure = s[layout.S_CAP_PRESSURE]
+    row.rod_pressure = s[layout.S_ROD_PRESSURE]
+    row.cap_temperature = out[layout.O_CAP_TEMPERATURE]
+    row.rod_temperature = out[layout.O_ROD_TEMPERATURE]
+    row.cap_mass_flow = out[layout.O_CAP_FLOW]
+    row.rod_mass_flow = out[layout.O_ROD_FLOW]
+    row.cap_mass = s[layout.S_CAP_MASS]
+    row.rod_mass = s[layout.S_ROD_MASS]
+    row.friction_force = out[layout.O_FRICTION_FORCE]
+    row.pneumatic_force = out[layout.O_PNEUMATIC_FORCE]
+    row.end_stop_force = out[layout.O_END_STOP_FORCE]
+    row.supply_pressure = supply_pressure_now(p, supply)
+    row.supply_mass_flow = out[layout.O_SUPPLY_DRAW]
+    row.air_consumed = s[layout.S_AIR_CONSUMED]
+    row.tank_pressure = (
         supply[layout.SUPPLY_TANK_PRESSURE] if supply[layout.SUPPLY_MODEL] == 1.0 else math.nan
     )
     # eq 4.1.11 with friction: what accelerates the piston besides gravity and the stops
-    row[20] = out[layout.O_PNEUMATIC_FORCE] - out[layout.O_FRICTION_FORCE]
+    row.net_force = out[layout.O_PNEUMATIC_FORCE] - out[layout.O_FRICTION_FORCE]
     normal_density = NORMAL_PRESSURE / (p[layout.P_R] * NORMAL_TEMPERATURE)
-    row[21] = s[layout.S_AIR_CONSUMED] / normal_density * 1000.0
+    row.air_consumed_normal_litres = s[layout.S_AIR_CONSUMED] / normal_density * 1000.0
+
+
+def new_rows(count: int) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` zeroed recording rows: the records (:data:`RIG_ROW_DTYPE`) the compiled
+    code fills, and the same memory as a ``(count, N_COLUMNS)`` float array."""
+    records = np.zeros(count, RIG_ROW_DTYPE)
+    return records, records.view(np.float64).reshape(count, N_COLUMNS)
 
 
 @compiled
@@ -127,9 +140,9 @@ def run_rig_chunk(
     count,
     control_step,
     substeps,
-    rows,
+    records,
 ):
-    """Run ``count`` control steps from index ``start``; fill rows[0:count]."""
+    """Run ``count`` control steps from index ``start``; fill records[0:count]."""
     commands = np.zeros(1)
     outputs = np.zeros((1, layout.N_OUTPUTS))
     for j in range(count):
@@ -145,7 +158,8 @@ def run_rig_chunk(
         commands[0] = command
         step_rigs(params, state, commands, control_step, substeps, supply, outputs)
         write_row(
-            rows[j],
+            records,
+            j,
             (k + 1) * control_step,
             command,
             reference,
@@ -288,7 +302,7 @@ def simulate_rig(
     gains = rig_controller_gains(setup)
     controller = np.zeros(N_CONTROLLER_STATES)
     total = int(signal.shape[0])
-    rows = np.zeros((total, N_COLUMNS))
+    records, rows = new_rows(total)
     dt = setup.simulation.control_step
     substeps = setup.simulation.substeps
     skipped = _skipped_columns(setup, closed_loop)
@@ -311,7 +325,7 @@ def simulate_rig(
                     count,
                     dt,
                     substeps,
-                    rows[done : done + count],
+                    records[done : done + count],
                 )
                 found = first_non_finite(rows[done : done + count], skipped)
                 if found is not None:
@@ -441,7 +455,7 @@ def simulate_rig_reference(
     atol = setup.simulation.absolute_tolerance * state_scales
     scales = state_scales[active]
     total = int(signal.shape[0])
-    rows = np.zeros((total, N_COLUMNS))
+    records, rows = new_rows(total)
     out = np.zeros(layout.N_OUTPUTS)
     done = 0
     flushed = 0
@@ -524,7 +538,7 @@ def simulate_rig_reference(
                         p[layout.P_STOP_STIFFNESS],
                         p[layout.P_STOP_DAMPING],
                     )
-                write_row(rows[k], (k + 1) * dt, command, reference, p, y, out, supply)
+                write_row(records, k, (k + 1) * dt, command, reference, p, y, out, supply)
                 found = first_non_finite(rows[k : k + 1], skipped)
                 if found is not None:
                     _stop_diverged(recorder, rows, flushed, k, RIG_COLUMNS[found[1]],
