@@ -17,6 +17,8 @@ from typing import Any
 import numpy as np
 
 from pneumaquad.actuator import chamber_ports
+from pneumaquad.conversions import METRE_PER_INCH as INCH
+from pneumaquad.conversions import PASCAL_PER_PSI as PSI
 from pneumaquad.params import load_rig
 from pneumaquad.plotting import plot_comparison
 from pneumaquad.rig import signals
@@ -24,9 +26,6 @@ from pneumaquad.rig.experiment import run_rig_experiment
 from pneumaquad.rig.simulate import RigResult
 from pneumaquad.stiction_plot import plot_stiction_comparison
 from pneumaquad.valve_fit import input_pressure
-
-INCH = 0.0254
-PSI = 6894.757
 
 
 def _rms(a: np.ndarray, b: np.ndarray) -> float:

@@ -19,6 +19,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from pneumaquad.conversions import METRE_PER_INCH as INCH
+from pneumaquad.conversions import PASCAL_PER_PSI as PSI
 from pneumaquad.params import load_rig
 from pneumaquad.reporting import build_run_report
 from pneumaquad.rig import signals
@@ -32,8 +34,6 @@ __all__ = [
     "write_lab_style_csv",
 ]
 
-INCH = 0.0254
-PSI = 6894.757293168361  # Pa per psi (lbf/in²)
 _STEP_LEVELS = [0.4 * INCH, 1.4 * INCH, 0.6 * INCH, 1.2 * INCH, 0.875 * INCH]
 #: Held commands of the stand-in spacer sweep [V]: both ports' transitions (thesis-rig
 #: centred voltages -1.25...+0.75 and -0.75...+1.25) hold several each.

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import matplotlib
 
+from pneumaquad.conversions import METRE_PER_INCH, PASCAL_PER_PSI
+
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
@@ -19,8 +21,6 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-METRE_PER_INCH = 0.0254
-PASCAL_PER_PSI = 6894.757
 DPI = 150
 
 TIME = "time [s]"

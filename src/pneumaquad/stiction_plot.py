@@ -9,6 +9,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from pneumaquad.conversions import METRE_PER_INCH
+
 
 def plot_stiction_comparison(
     recordings: Mapping[str, Mapping[str, np.ndarray]], path: Path
@@ -21,13 +23,14 @@ def plot_stiction_comparison(
     figure, (ax_position, ax_speed) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
     for index, (label, recording) in enumerate(recordings.items()):
         time = recording["time [s]"]
-        ax_position.plot(time, recording["position [m]"] / 0.0254, color=f"C{index}", label=label)
+        ax_position.plot(time, recording["position [m]"] / METRE_PER_INCH, color=f"C{index}",
+                         label=label)
         speed = np.maximum(np.abs(recording["velocity [m/s]"]), 1e-9)
         ax_speed.semilogy(time, speed * 1000.0, color=f"C{index}", lw=0.8, label=label)
     first = next(iter(recordings.values()))
     ax_position.plot(
         first["time [s]"],
-        first["reference position [m]"] / 0.0254,
+        first["reference position [m]"] / METRE_PER_INCH,
         "k--",
         lw=1.0,
         label="reference",

@@ -30,6 +30,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from pneumaquad.conversions import METRE_PER_INCH, PASCAL_PER_PSI
+
 __all__ = [
     "QUANTITIES",
     "STANDARD_ATMOSPHERE",
@@ -48,7 +50,6 @@ __all__ = [
 #: Default atmospheric pressure added to gauge readings [Pa].
 STANDARD_ATMOSPHERE = 101325.0
 
-_PSI = 6894.757293168361  # Pa per lbf/in^2 (1 lbf = 4.4482216152605 N, 1 in = 0.0254 m)
 
 
 class MeasuredDataError(ValueError):
@@ -111,17 +112,17 @@ UNITS: dict[str, Unit] = {
     "m": Unit("length", 1.0),
     "cm": Unit("length", 1e-2),
     "mm": Unit("length", 1e-3),
-    "in": Unit("length", 0.0254),
+    "in": Unit("length", METRE_PER_INCH),
     "Pa": Unit("pressure", 1.0),
     "kPa": Unit("pressure", 1e3),
     "MPa": Unit("pressure", 1e6),
     "bara": Unit("pressure", 1e5),
-    "psia": Unit("pressure", _PSI),
+    "psia": Unit("pressure", PASCAL_PER_PSI),
     "Pag": Unit("pressure", 1.0, gauge=True),
     "kPag": Unit("pressure", 1e3, gauge=True),
     "MPag": Unit("pressure", 1e6, gauge=True),
     "barg": Unit("pressure", 1e5, gauge=True),
-    "psig": Unit("pressure", _PSI, gauge=True),
+    "psig": Unit("pressure", PASCAL_PER_PSI, gauge=True),
     "V": Unit("voltage", 1.0),
     "mV": Unit("voltage", 1e-3),
 }

@@ -20,6 +20,7 @@ from pneumaquad.analysis.compare import (
     compare_recordings,
 )
 from pneumaquad.analysis.segmentation import find_steps, metrics_per_step
+from pneumaquad.conversions import METRE_PER_INCH, PASCAL_PER_PSI
 from pneumaquad.plotting import DPI, metres_to_inches, pascals_to_psi, plot_comparison, plt
 
 from .run_folder import ReportError
@@ -41,7 +42,7 @@ COMPARED_SIGNALS = (
     "supply pressure [Pa]",
 )
 #: Display unit per SI unit: (name, factor to divide by).
-_DISPLAY = {"m": ("in", 0.0254), "Pa": ("psi", 6894.757293168361)}
+_DISPLAY = {"m": ("in", METRE_PER_INCH), "Pa": ("psi", PASCAL_PER_PSI)}
 #: Command jump [V] and reference jump [fraction of stroke] that make a step.
 COMMAND_STEP_THRESHOLD = 0.05
 REFERENCE_STEP_FRACTION = 0.01

@@ -32,6 +32,7 @@ import numpy as np
 
 from pneumaquad.actuator import supply_state
 from pneumaquad.control.pid import N_CONTROLLER_STATES
+from pneumaquad.conversions import METRE_PER_INCH
 from pneumaquad.params import RigSetup, load_rig
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 from pneumaquad.rig.signals import sine
@@ -184,7 +185,7 @@ def measure_cost_table(
     parameter_set: str = "thesis-rig",
     duration: float = 4.0,
     repeats: int = 15,
-    amplitude: float = 0.4 * 0.0254,
+    amplitude: float = 0.4 * METRE_PER_INCH,
     frequency: float = 0.5,
     progress: Callable[[int, int], None] | None = None,
 ) -> CostTable:

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
+from pneumaquad.conversions import NEWTON_PER_LBF
 from pneumaquad.params import ActuatorParameters
 from pneumaquad.plotting import DPI, METRE_PER_INCH, PASCAL_PER_PSI, plt
 
@@ -26,7 +27,6 @@ from .curves import (
 
 __all__ = ["plot_area_curves", "plot_friction_curves", "plot_input_pressure_curves"]
 
-NEWTON_PER_LBF = 4.4482216152605
 _CHAMBER_COLOURS = {"cap": "C3", "rod": "C2"}
 _GROUP_STYLES = ("-", "--", ":", "-.")
 

@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from pneumaquad.conversions import METRE_PER_INCH, NEWTON_PER_LBF, PASCAL_PER_PSI
 from pneumaquad.params import (
     JOINT_NAMES,
     ActuatorParameters,
@@ -29,21 +30,18 @@ __all__ = [
 ]
 
 Row = tuple[str, str, Any, str, str]
-PSI = 6894.757293168361
-INCH = 0.0254
-LBF = 4.4482216152605
 
 
 def _psi(pa: float, atmosphere: float) -> str:
-    return f"{pa / PSI:.4g} psia ({(pa - atmosphere) / PSI:.4g} psig)"
+    return f"{pa / PASCAL_PER_PSI:.4g} psia ({(pa - atmosphere) / PASCAL_PER_PSI:.4g} psig)"
 
 
 def _inch(m: float) -> str:
-    return f"{m / INCH:.4g} in"
+    return f"{m / METRE_PER_INCH:.4g} in"
 
 
 def _lbf(n: float) -> str:
-    return f"{n / LBF:.4g} lbf"
+    return f"{n / NEWTON_PER_LBF:.4g} lbf"
 
 
 def friction_rows(group: str, friction: FrictionParameters) -> list[Row]:
@@ -62,7 +60,7 @@ def friction_rows(group: str, friction: FrictionParameters) -> list[Row]:
                 "viscous coefficient Cv",
                 f.viscous_coefficient,
                 "N s/m",
-                f"{f.viscous_coefficient * INCH / LBF:.4g} lbf s/in",
+                f"{f.viscous_coefficient * METRE_PER_INCH / NEWTON_PER_LBF:.4g} lbf s/in",
             )
         )
     if uses_stribeck:
@@ -72,7 +70,7 @@ def friction_rows(group: str, friction: FrictionParameters) -> list[Row]:
                 "Stribeck velocity vS",
                 f.stribeck_velocity,
                 "m/s",
-                f"{f.stribeck_velocity / INCH:.4g} in/s",
+                f"{f.stribeck_velocity / METRE_PER_INCH:.4g} in/s",
             ),
             (group, "Stribeck exponent i", f.stribeck_exponent, "-", ""),
         ]
@@ -83,7 +81,7 @@ def friction_rows(group: str, friction: FrictionParameters) -> list[Row]:
                 "tanh coefficient k_tanh",
                 f.tanh_coefficient,
                 "s/m",
-                f"{f.tanh_coefficient * INCH:.4g} s/in",
+                f"{f.tanh_coefficient * METRE_PER_INCH:.4g} s/in",
             )
         )
     if f.model == "viscous":
@@ -157,7 +155,8 @@ def rig_parameter_rows(setup: RigSetup) -> list[Row]:
         ("rig", "orientation", r.orientation, "", ""),
         ("rig", "spacer (piston held)", r.spacer, "", ""),
         ("rig", "initial position", r.initial_position, "m", _inch(r.initial_position)),
-        ("controller", "Kp", k.proportional_gain, "V/m", f"{k.proportional_gain * INCH:.4g} V/in"),
+        ("controller", "Kp", k.proportional_gain, "V/m",
+         f"{k.proportional_gain * METRE_PER_INCH:.4g} V/in"),
         ("controller", "Ki", k.integral_gain, "V/(m s)", ""),
         ("controller", "Kd", k.derivative_gain, "V s/m", ""),
         ("controller", "integral limit", k.integral_limit, "V", ""),
