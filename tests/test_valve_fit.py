@@ -113,10 +113,20 @@ def test_input_pressure_rejects_equal_cutoffs() -> None:
 
 @pytest.mark.parametrize(("high", "low"), [(1.25, -0.75), (-0.5, 1.0)])
 def test_fit_input_pressure_curve_recovers_cutoffs(high: float, low: float) -> None:
+    from pneumaquad.identification import fit_input_pressure_curve
+
     rng = np.random.default_rng(2011)
     u = np.linspace(-5, 5, 81)
     truth = vf.input_pressure(u, PS, PE, high, low)
     noisy = truth + rng.normal(0.0, 0.01 * (PS - PE), u.shape)
-    fitted_high, fitted_low = vf.fit_input_pressure_curve(u, noisy, PS, PE)
-    assert fitted_high == pytest.approx(high, abs=0.05)
-    assert fitted_low == pytest.approx(low, abs=0.05)
+    fit = fit_input_pressure_curve(u, noisy, PS, PE)
+    assert fit.value("high_pressure_cutoff") == pytest.approx(high, abs=0.05)
+    assert fit.value("low_pressure_cutoff") == pytest.approx(low, abs=0.05)
+
+
+def test_array_input_pressure_is_the_compiled_one() -> None:
+    from pneumaquad.physics.valve import input_pressure
+
+    u = np.linspace(-3, 3, 61)
+    expected = [input_pressure(x, PS, PE, 1.25, -0.75) for x in u]
+    np.testing.assert_array_equal(vf.input_pressure(u, PS, PE, 1.25, -0.75), expected)

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import least_squares
+
+from pneumaquad.physics.valve import input_pressure as port_input_pressure
 
 #: Valve offset voltage the centred voltages are measured from [V].
 VALVE_OFFSET_VOLTAGE = 5.25
@@ -207,13 +208,14 @@ def input_pressure(
     high_cutoff: float,
     low_cutoff: float,
 ) -> np.ndarray:
-    """Effective valve input pressure, eqs. (4.2.7)-(4.2.11).
+    """Effective valve input pressure, eqs. (4.2.7)-(4.2.11), for arrays of voltages.
 
-    ``P = y_off + C_scale * tanh(K * (u - x_off))`` with
-    ``y_off = (Ps + Pe)/2``, ``x_off = (Chp + Clp)/2``,
-    ``C_scale = sign(Chp - Clp) (Ps - Pe)/2`` and ``K = 2 pi / |Clp - Chp|``
-    (also App. B.1.2 Port_2 l.30-35). The formula is linear in the pressures,
-    so any consistent pressure unit works; SI [Pa] is intended.
+    The array form of :func:`pneumaquad.physics.valve.input_pressure` (the one
+    implementation, compiled, that the kernel uses), evaluated element by element:
+    ``P = y_off + C_scale * tanh(K * (u - x_off))`` with ``y_off = (Ps + Pe)/2``,
+    ``x_off = (Chp + Clp)/2``, ``C_scale = sign(Chp - Clp) (Ps - Pe)/2`` and
+    ``K = 2 pi / |Clp - Chp|`` (also App. B.1.2 Port_2 l.30-35). The fit of the cutoffs
+    to measured pressures is :func:`pneumaquad.identification.fit_input_pressure_curve`.
 
     Parameters
     ----------
@@ -232,67 +234,9 @@ def input_pressure(
     """
     if high_cutoff == low_cutoff:
         raise ValueError("high and low cutoffs must differ")
-    u = np.asarray(centered_voltage, dtype=float)
-    y_offset = 0.5 * (supply_pressure + exhaust_pressure)
-    x_offset = 0.5 * (high_cutoff + low_cutoff)
-    scale = np.sign(high_cutoff - low_cutoff) * 0.5 * (supply_pressure - exhaust_pressure)
-    gain = 2.0 * np.pi / abs(low_cutoff - high_cutoff)
-    return y_offset + scale * np.tanh(gain * (u - x_offset))
+    return _input_pressure_array(np.asarray(centered_voltage, dtype=float),
+                                 float(supply_pressure), float(exhaust_pressure),
+                                 float(high_cutoff), float(low_cutoff))
 
 
-def fit_input_pressure_curve(
-    centered_voltages: ArrayLike,
-    pressures: ArrayLike,
-    supply_pressure: float,
-    exhaust_pressure: float,
-) -> tuple[float, float]:
-    """Least-squares fit of the tanh cutoffs to measured input pressures (sec. 4.2.3).
-
-    Ps and Pe are fixed; only the two cutoffs are fitted, parametrised as
-    centre and signed width so the fit never passes through ``Chp == Clp``.
-    The sign of the slope (supply on the positive or negative side) is taken
-    from the data.
-
-    Parameters
-    ----------
-    centered_voltages
-        Centred valve voltages [V].
-    pressures
-        Steady-state input pressures at those voltages [Pa].
-    supply_pressure, exhaust_pressure
-        Supply and exhaust pressures [Pa].
-
-    Returns
-    -------
-    tuple[float, float]
-        ``(high_cutoff, low_cutoff)`` [V].
-    """
-    u = np.asarray(centered_voltages, dtype=float).ravel()
-    p = np.asarray(pressures, dtype=float).ravel()
-    if u.shape != p.shape or u.size < 2:
-        raise ValueError("need at least two (voltage, pressure) pairs of equal length")
-    span = supply_pressure - exhaust_pressure
-    if span == 0.0:
-        raise ValueError("supply and exhaust pressures must differ")
-
-    # Initial guess: centre where the pressure crosses the mid level, sign from
-    # the correlation of pressure with voltage, width a quarter of the range.
-    mid = 0.5 * (supply_pressure + exhaust_pressure)
-    direction = float(np.sign(np.sum((u - u.mean()) * (p - p.mean())) * span)) or 1.0
-    centre0 = float(u[np.argmin(np.abs(p - mid))])
-    width0 = max(0.25 * float(np.ptp(u)), 1e-3)
-
-    def residuals(params: np.ndarray) -> np.ndarray:
-        centre, log_width = params
-        width = np.exp(log_width)
-        high = centre + direction * width / 2.0
-        low = centre - direction * width / 2.0
-        model = input_pressure(u, supply_pressure, exhaust_pressure, high, low)
-        return (model - p) / span
-
-    result = least_squares(residuals, x0=[centre0, np.log(width0)], method="lm")
-    centre, log_width = result.x
-    width = float(np.exp(log_width))
-    high = float(centre + direction * width / 2.0)
-    low = float(centre - direction * width / 2.0)
-    return high, low
+_input_pressure_array = np.vectorize(port_input_pressure, otypes=[float])
