@@ -7,8 +7,6 @@ Radau reference, and a finite tank running down. Each experiment gets its own ru
 ``report.md`` and ``report.html`` (figures embedded) summarise them.
 """
 
-import base64
-import html
 import json
 from collections.abc import Callable
 from pathlib import Path
@@ -21,6 +19,7 @@ from pneumaquad.conversions import METRE_PER_INCH as INCH
 from pneumaquad.conversions import PASCAL_PER_PSI as PSI
 from pneumaquad.params import load_rig
 from pneumaquad.plotting import plot_comparison
+from pneumaquad.reporting.html import HtmlPage
 from pneumaquad.rig import signals
 from pneumaquad.rig.experiment import run_rig_experiment
 from pneumaquad.rig.simulate import RigResult
@@ -52,13 +51,7 @@ class DemoReport:
             "parameters.toml).",
             "",
         ]
-        page = [
-            "<!doctype html><html><head><meta charset='utf-8'>",
-            "<title>pneumaquad demo</title><style>body{font-family:sans-serif;"
-            "max-width:1000px;margin:auto}table{border-collapse:collapse}"
-            "td,th{border:1px solid #bbb;padding:2px 8px}img{max-width:100%}</style>"
-            "</head><body><h1>pneumaquad demo</h1>",
-        ]
+        page = HtmlPage("pneumaquad demo")
         for section in self.sections:
             figure = section["figure"]
             relative = figure.relative_to(self.folder)
@@ -72,20 +65,13 @@ class DemoReport:
             ]
             lines += [f"| {key} | {_format(value)} |" for key, value in section["figures"].items()]
             lines += ["", f"![{section['title']}]({relative.as_posix()})", ""]
-            encoded = base64.b64encode(figure.read_bytes()).decode("ascii")
-            rows = "".join(
-                f"<tr><td>{html.escape(k)}</td><td>{html.escape(_format(v))}</td></tr>"
-                for k, v in section["figures"].items()
-            )
-            page += [
-                f"<h2>{html.escape(section['title'])}</h2>",
-                f"<p>{html.escape(section['text'])}</p>",
-                f"<table><tr><th>figure</th><th>value</th></tr>{rows}</table>",
-                f"<img src='data:image/png;base64,{encoded}'>",
-            ]
-        page.append("</body></html>")
+            page.heading(section["title"])
+            page.paragraph(section["text"])
+            page.table(["figure", "value"],
+                       [(key, _format(value)) for key, value in section["figures"].items()])
+            page.figure(figure, section["title"])
         (self.folder / "report.md").write_text("\n".join(lines), encoding="utf-8")
-        (self.folder / "report.html").write_text("\n".join(page), encoding="utf-8")
+        page.write(self.folder / "report.html")
         key_figures = {s["title"]: s["figures"] for s in self.sections}
         (self.folder / "summary.json").write_text(
             json.dumps(key_figures, indent=2), encoding="utf-8"
