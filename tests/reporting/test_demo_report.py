@@ -7,9 +7,9 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
-from pneumaquad.demo import DemoReport  # noqa: E402
+from pneumaquad.demo import DemoReport
 
 
 def test_demo_report_sections_escape_and_embed(tmp_path: Path) -> None:
