@@ -42,19 +42,19 @@ def test_position_control_rocks_onto_a_diagonal_and_force_tracking_shares_the_lo
     rigid, _ = _stand_with_a_leg_length_error(2.0, None)
     # the longer front_left leg and its diagonal partner rear_right carry the robot
     assert rigid.sum() == pytest.approx(weight, rel=0.02)
-    assert min(rigid[0], rigid[3]) > 1.8 * max(rigid[1], rigid[2])  # measured 18 vs 7 N
+    assert min(rigid[0], rigid[3]) > 1.8 * max(rigid[1], rigid[2])  # measured 17.4 vs 7.9 N
     tracked, desired = _stand_with_a_leg_length_error(2.0, np.ones(4))
     assert desired.sum() == pytest.approx(weight, rel=1e-3)
-    assert tracked == pytest.approx(desired, abs=1.5)  # measured within 0.4 N
+    assert tracked == pytest.approx(desired, abs=1.5)  # measured within 0.72 N
 
 
 def test_uneven_shares_are_tracked_where_seal_stiction_does_not_hold_the_legs():
     # Moving load along the diagonals of a robot standing still needs no motion, so the
-    # cylinders' seal stiction (breakaway 20 N, App. C.1.1) can hold most of it: with the
-    # thesis's seals the feet moved 1.5 of the 4.7 N asked. Without seal friction the
-    # statics' share is what the feet carry.
+    # cylinders' seal stiction (breakaway 20 N, App. C.1.1) can hold part of it (how much
+    # depends on the pose: docs/robot.md). Without seal friction the statics' share is
+    # what the feet carry.
     shares = np.array([1.0, 1.0, 1.0, 0.25])
     tracked, desired = _stand_with_a_leg_length_error(0.0, shares, seal_friction=False)
     # the light foot and its diagonal partner carry less (the twist mode), the others more
     assert desired[3] < desired[1] - 2.0 and desired[0] < desired[2] - 2.0
-    assert tracked == pytest.approx(desired, abs=1.5)  # measured within 1.2 N
+    assert tracked == pytest.approx(desired, abs=1.5)  # measured within 0.35 N

@@ -35,4 +35,4 @@ def test_the_quadruped_walks_the_terrain(tmp_path: Path, environment: str,
     outcome = walking_outcome(run.recording, run.summary, settings, robot, tip_over)
     assert outcome["success"], outcome
     assert outcome["time with negative tip-over margin [%]"] < 1.0
-    assert outcome["air per metre [NL/m]"] < 10.0  # measured 6.5-7.2 NL/m
+    assert outcome["air per metre [NL/m]"] < 10.0  # measured 6.1-6.5 NL/m
