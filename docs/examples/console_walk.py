@@ -1,0 +1,141 @@
+"""Measure the console's automatic online crawl (docs/console.md, "Walking").
+
+Drives :class:`pneumaquad.console.app.ConsoleApp` headless and unpaced (no browser): the
+free quadruped on flat ground from the console's reset pose, 0.5 s to settle, then the
+automatic walking mode straight ahead (heading 0) for ``--duration`` seconds, one 20 ms
+chunk at a time as the console's thread steps it. After every chunk it reads what the
+console shows: the loaded-feet static stability margin (feet with a normal force above
+1 N) and the thorax pose.
+
+    .venv/bin/python docs/examples/console_walk.py --speed 15 --speed 30
+    .venv/bin/python docs/examples/console_walk.py --speed 15 --stance position
+
+Prints per run: the thorax's straight-line distance and its forward (x) and sideways (y)
+travel, the largest |yaw| and the final yaw, steps taken, chunks with a refused lift, the
+mean and lowest thorax height, the fraction of chunks whose loaded-feet margin is negative
+(and those with no loaded foot), whether the thorax fell below 0.25 m, and the wall time
+spent in the console's chunks (stepping and refreshing the scene and panels, as the
+unpaced console's thread does).
+
+The margin is given twice: as the console shows it (``app.stability``, from
+``foot_normal_forces()`` between chunks) and from contact forces made consistent with the
+state by ``mujoco.mj_forward`` on a copy of the MuJoCo data. A chunk ends with
+``mj_step1``, which finds the contacts but does not compute their forces, so the first can
+read forces that belong to a different contact set (the feet then show 0 N); the second is
+what the physics says.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from pneumaquad.console.app import ConsoleApp
+from pneumaquad.console.walking import ConsoleWalking
+from pneumaquad.gait.stability import loaded_support
+from pneumaquad.robot.recording import thorax_attitude
+
+SETTLE_CHUNKS = 25  # 0.5 s of 20 ms chunks before walking starts
+FALLEN_HEIGHT = 0.25  # thorax height [m] below which the robot counts as fallen
+
+
+def consistent_margin(simulation) -> float:
+    """Loaded-feet margin [m] with the contact forces of the present state (mj_forward on a
+    copy of the MuJoCo data; the simulation itself is not touched)."""
+    data = simulation.data
+    forward = copy.copy(data)
+    mujoco.mj_forward(simulation.model, forward)
+    simulation.data = forward
+    try:
+        forces = simulation.foot_normal_forces()
+    finally:
+        simulation.data = data
+    _, margin = loaded_support(simulation.foot_positions(), forces, data.subtree_com[0, :2])
+    return float(margin)
+
+
+def walk(speed: float, duration: float, stance: str) -> dict[str, float]:
+    """One automatic walk at ``speed`` [m/s]; the measured figures."""
+    app = ConsoleApp(configuration="quadruped", environment="flat", port=0, real_time=False)
+    try:
+        if stance == "position":
+            app.walking = ConsoleWalking(app.simulation, stance=None)
+        simulation = app.simulation
+        thorax = simulation.robot.thorax_id
+        for _ in range(SETTLE_CHUNKS):
+            app.advance()
+        start = simulation.data.xpos[thorax].copy()
+        app.set_walking("automatic", speed=speed, heading=0.0)
+        chunks = round(duration / (app.chunk_steps * simulation.control_step))
+        margins, consistent, yaws, heights, refusals = [], [], [], [], 0
+        wall = 0.0
+        for _ in range(chunks):
+            clock = time.perf_counter()
+            app.advance()
+            wall += time.perf_counter() - clock
+            if app.message:  # a diverging step pauses the console
+                break
+            margins.append(app.stability.margin)
+            consistent.append(consistent_margin(simulation))
+            yaws.append(thorax_attitude(simulation)[2])
+            heights.append(simulation.data.xpos[thorax][2])
+            refusals += bool(app.walking.crawl.refusal)
+        end = simulation.data.xpos[thorax]
+        margins, consistent = np.asarray(margins), np.asarray(consistent)
+        yaws = np.degrees(np.asarray(yaws))
+        return {
+            "simulated [s]": len(margins) * app.chunk_steps * simulation.control_step,
+            "straight-line distance [m]": float(np.hypot(*(end[:2] - start[:2]))),
+            "forward x [m]": end[0] - start[0],
+            "sideways y [m]": end[1] - start[1],
+            "max |yaw| [deg]": float(np.max(np.abs(yaws))),
+            "final yaw [deg]": float(yaws[-1]),
+            "steps": app.walking.crawl.steps_taken,
+            "chunks with a refused lift": refusals,
+            "mean thorax height [m]": float(np.mean(heights)),
+            "min thorax height [m]": float(np.min(heights)),
+            "margin < 0, console readout [%]": 100.0 * float(np.mean(margins < 0.0)),
+            "no loaded foot, console readout [%]": 100.0 * float(np.mean(np.isnan(margins))),
+            "margin < 0, consistent forces [%]": 100.0 * float(np.mean(consistent < 0.0)),
+            "no loaded foot, consistent forces [%]": 100.0 * float(np.mean(np.isnan(consistent))),
+            "fell": float(np.min(heights) < FALLEN_HEIGHT),
+            "wall time of the console's chunks [s]": wall,
+            "message": app.message,
+        }
+    finally:
+        app.close()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--speed",
+        type=float,
+        action="append",
+        help="commanded body speed [mm/s], repeatable (default 15 and 30)",
+    )
+    parser.add_argument("--duration", type=float, default=30.0, help="walking time [s]")
+    parser.add_argument(
+        "--stance",
+        choices=("force", "position"),
+        default="force",
+        help="force-controlled stance (the console's) or plain position control",
+    )
+    args = parser.parse_args()
+    for speed in args.speed or [15.0, 30.0]:
+        figures = walk(speed / 1000.0, args.duration, args.stance)
+        print(f"{speed:g} mm/s, {args.stance} stance:")
+        for name, value in figures.items():
+            if isinstance(value, float) and not math.isnan(value):
+                print(f"  {name}: {value:.3f}")
+            else:
+                print(f"  {name}: {value}")
+
+
+if __name__ == "__main__":
+    main()
