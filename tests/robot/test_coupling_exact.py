@@ -242,3 +242,49 @@ def test_simulations_of_one_robot_model_do_not_interfere() -> None:
     alone.step(30 * CHUNK)
     np.testing.assert_array_equal(first.data.qpos, alone.data.qpos)
     np.testing.assert_array_equal(first.state, alone.state)
+
+
+def _standing_quadruped() -> RobotSimulation:
+    from pneumaquad.console.app import initial_pose
+
+    simulation = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    initial_pose(simulation)  # dropped onto its feet from 3 mm, closed loop
+    return simulation
+
+
+def test_contact_forces_between_chunks_are_those_of_the_present_contacts() -> None:
+    """Between chunks the foot forces equal MuJoCo's own forward dynamics of the state
+    (mj_step1 alone would leave the last step's constraint solution under the new
+    contact rows: feet read 0 N at times while the robot stood on them)."""
+    simulation = _standing_quadruped()
+    for _ in range(60):
+        simulation.step(7)  # chunks that end between the 10 ms recording grid
+        check = mujoco.MjData(simulation.model)
+        mujoco.mj_copyData(check, simulation.model, simulation.data)
+        mujoco.mj_forward(simulation.model, check)
+        forces = simulation.foot_normal_forces()
+        model, data = simulation.model, check
+        expected = np.zeros(4)
+        wrench = np.zeros(6)
+        tibia = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
+                 for index, leg in enumerate(simulation.robot.legs)}
+        for index in range(data.ncon):
+            contact = data.contact[index]
+            for body in (model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2]):
+                if int(body) in tibia:
+                    mujoco.mj_contactForce(model, data, index, wrench)
+                    expected[tibia[int(body)]] += abs(wrench[0])
+        np.testing.assert_allclose(forces, expected, rtol=1e-6, atol=1e-6)
+    weight = simulation.model.body_mass.sum() * 9.81
+    assert simulation.foot_normal_forces().sum() == pytest.approx(weight, rel=0.05)
+
+
+def test_chunk_size_does_not_change_a_run_with_contacts() -> None:
+    def run(size: int) -> np.ndarray:
+        simulation = _standing_quadruped()
+        for _ in range(140 // size):
+            simulation.step(size)
+        return np.concatenate([simulation.data.qpos, simulation.state.ravel()])
+
+    np.testing.assert_array_equal(run(1), run(140))
+    np.testing.assert_array_equal(run(7), run(140))

@@ -244,6 +244,11 @@ class DynamicsSide:
         for _ in range(self.physics_steps - 1):
             mujoco.mj_step(model, data)
         mujoco.mj_step1(model, data)
+        # the force stages too: contact forces read between steps belong to the present
+        # contacts (as in the in-process run; mj_step2 recomputes them)
+        mujoco.mj_fwdActuation(model, data)
+        mujoco.mj_fwdAcceleration(model, data)
+        mujoco.mj_fwdConstraint(model, data)
         coupling["fresh"] = 1
         self.simulation.steps_taken += 1
         if np.any(data.warning.number[UNSTABLE_WARNINGS] != before):

@@ -59,6 +59,7 @@ from .coupling import (
 )
 from .errors import SimulationDivergedError
 from .stepping import (
+    MJ_FORCE_STAGE_ADDRESSES,
     MJ_STEP1_ADDRESS,
     MJ_STEP2_ADDRESS,
     MJ_STEP_ADDRESS,
@@ -87,7 +88,8 @@ def _step_addresses(model: mujoco.MjModel) -> np.ndarray:
     RK4 (which ``mj_step2`` does not integrate) a whole ``mj_step`` from the same state."""
     second = MJ_STEP_ADDRESS if model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4 \
         else MJ_STEP2_ADDRESS
-    return np.array([MJ_STEP1_ADDRESS, second, MJ_STEP_ADDRESS], dtype=np.uint64)
+    return np.array([MJ_STEP1_ADDRESS, second, MJ_STEP_ADDRESS, *MJ_FORCE_STAGE_ADDRESSES],
+                    dtype=np.uint64)
 
 
 def seal_friction_row(actuator: ActuatorParameters) -> np.ndarray:

@@ -3,9 +3,10 @@
 Each control step is ``mj_step1`` (kinematics, contacts and velocities of the present
 state), the control step of :mod:`pneumaquad.robot.coupling` on those, then ``mj_step2``
 (forces, accelerations, integration), and ``mj_step`` for any further physics steps of
-the control step. A chunk ends with ``mj_step1`` and the actuators brought to the end
-time, so between chunks MuJoCo's derived quantities, the piston positions and the chamber
-states all belong to the same instant.
+the control step. A chunk ends with ``mj_step1``, MuJoCo's force stages (so contact forces are
+those of the present contacts, with the last applied cylinder forces) and the actuators
+brought to the end time, so between chunks MuJoCo's derived quantities, the piston
+positions and the chamber states all belong to the same instant.
 
 ``mj_step1``, ``mj_step2`` and ``mj_step`` are looked up in MuJoCo's shared library
 through ``ctypes`` and called from a numba loop with the raw ``mjModel*``/``mjData*``
@@ -42,6 +43,7 @@ from .coupling import (
 )
 
 __all__ = [
+    "MJ_FORCE_STAGE_ADDRESSES",
     "MJ_STEP1_ADDRESS",
     "MJ_STEP2_ADDRESS",
     "MJ_STEP_ADDRESS",
@@ -89,6 +91,11 @@ mujoco_step_function = _step_function(_library, "mj_step")
 MJ_STEP_ADDRESS = ctypes.cast(mujoco_step_function, ctypes.c_void_p).value
 MJ_STEP1_ADDRESS = ctypes.cast(_step_function(_library, "mj_step1"), ctypes.c_void_p).value
 MJ_STEP2_ADDRESS = ctypes.cast(_step_function(_library, "mj_step2"), ctypes.c_void_p).value
+#: Addresses of the stages that complete ``mj_step1`` into ``mj_forward`` (actuator
+#: forces, smooth accelerations, the constraint solve with the contact forces).
+MJ_FORCE_STAGE_ADDRESSES = tuple(
+    ctypes.cast(_step_function(_library, name), ctypes.c_void_p).value
+    for name in ("mj_fwdActuation", "mj_fwdAcceleration", "mj_fwdConstraint"))
 
 
 @intrinsic
@@ -116,7 +123,8 @@ def _unstable(warning_counts, baseline) -> bool:
 class MujocoStepper(NamedTuple):
     """How the compiled loop calls MuJoCo for one simulation."""
 
-    step_addresses: np.ndarray  # mj_step1, the second half (mj_step2 or mj_step), mj_step
+    step_addresses: np.ndarray  # mj_step1, the second half (mj_step2 or mj_step), mj_step,
+    #                             then mj_fwdActuation, mj_fwdAcceleration, mj_fwdConstraint
     model_address: int  # mjModel*
     data_address: int  # mjData*
     warning_counts: np.ndarray  # data.warning.number
@@ -169,6 +177,11 @@ def advance_chunk(stepper: MujocoStepper, step_count: int, reference_table,
             return k + 1, STATUS_MUJOCO, -1
     if coupling[0].fresh == 0:
         _call_step(step1, model, data)
+        # the force stages too, so that the contact forces read between chunks are those
+        # of the present contacts (mj_step1 alone leaves the last step's solution in
+        # efc_force, indexed by the new contact rows); step2 recomputes them anyway
+        for stage in range(3, 6):
+            _call_step(addresses[stage], model, data)
         coupling[0].fresh = 1
     if _unstable(warning_counts, baseline):
         return step_count, STATUS_MUJOCO, -1
