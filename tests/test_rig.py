@@ -342,9 +342,9 @@ def test_fixed_step_matches_radau_open_loop_step() -> None:
 def test_fixed_step_matches_radau_closed_loop_sine() -> None:
     """1 Hz, 0.3 in sine about mid-stroke for 2.5 s, LuGre friction, PID in the loop.
 
-    Measured: position RMSE 0.016 mm = 0.036 % of stroke (max 0.25 mm); pressure RMSE
-    cap 0.15 kPa, rod 0.52 kPa = 0.12 % of supply. (Stribeck-tanh: 0.034 mm = 0.077 %,
-    0.73 kPa = 0.16 %.)"""
+    Measured: position RMSE 0.016 mm = 0.035 % of stroke (max 0.25 mm); pressure RMSE
+    cap 0.15 kPa, rod 0.52 kPa = 0.12 % of supply. (Stribeck-tanh: 0.013 mm = 0.029 %,
+    0.47 kPa = 0.10 %.)"""
     position, pressure, _ = compare_integrators(
         ('friction.model="lugre"',),
         lambda s: signals.sine(
