@@ -198,6 +198,9 @@ def _serve_thesis(params: str, overrides: list[str] | None, configuration: str, 
     if request.requested:
         console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
         raise typer.Exit(130)
+    if "error" in summary:
+        _fail(f"{summary['error']} (the last good state was held and the run ended; the "
+              "files hold the part that ran)", status=1)
 
 
 @serve_app.command("actuators")

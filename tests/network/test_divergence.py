@@ -94,3 +94,29 @@ def test_lockstep_server_flags_counts_and_ends_on_divergence(
     recording = pq.read_table(tmp_path / "recording.parquet").to_pydict()
     flags = np.array(recording["network status [-]"], dtype=int)
     assert flags[-1] & StatusFlag.DIVERGED and not np.any(flags[:-1] & StatusFlag.DIVERGED)
+
+
+def test_thesis_layout_server_ends_on_divergence() -> None:
+    """The thesis's 21-double layout has no status field: the server answers with the last
+    good state, counts the divergence and ends the run."""
+    from pneumaquad.network.thesis import encode_thesis_command
+    from pneumaquad.network.thesis_server import ThesisServer
+
+    robot = build_robot(load_robot("crr-quadruped", list(UNSTABLE)), "fixed")
+    side = DynamicsSide(robot, "torque")
+    side.set_pose(POSE)
+    server = ThesisServer(side, ("127.0.0.1", 0))
+    try:
+        times = []
+        for step in range(400):
+            torque = 8.0 if step % 2 == 0 else -8.0
+            reply = server.handle(encode_thesis_command([torque, -torque, torque]))
+            assert reply is not None
+            times.append(side.time)
+            if server.divergences:
+                break
+        assert server.divergences == 1 and "diverged" in server.divergence
+        assert side.diverged and np.all(np.diff(times) >= 0.0)
+        assert server.steps == len(times) - 1  # the diverging step was not counted
+    finally:
+        server.socket.close()

@@ -33,6 +33,7 @@ from pneumaquad.network.run_output import NetworkRecording, write_run_descriptio
 from pneumaquad.network.thesis import THESIS_SIZE, decode_thesis_command, encode_thesis_state
 from pneumaquad.network.wire import ProtocolError
 from pneumaquad.recording import jsonable
+from pneumaquad.robot.errors import SimulationDivergedError
 
 __all__ = ["ThesisServer"]
 
@@ -80,6 +81,8 @@ class ThesisServer:
         self.hold_angles = side.data.qpos[robot.qpos_address].copy()
         self.sent = 0
         self.steps = 0
+        self.divergences = 0  # steps that diverged (the run then ends) [count]
+        self.divergence: str | None = None
         self.dropped: Counter[str] = Counter()
         self._stop = False
 
@@ -114,8 +117,16 @@ class ThesisServer:
             self.dropped[error.reason] += 1
             return None
         self.side.apply(self._torques(command.torques, command.rear_left_angles))
-        self.side.step()
-        self.steps += 1
+        try:
+            self.side.step()
+        except SimulationDivergedError as error:
+            # the side undid the step and engaged the safe state; the thesis layout has no
+            # status field, so the run ends after this reply (of the last good state)
+            self.divergences += 1
+            self.divergence = str(error)
+            self._stop = True
+        else:
+            self.steps += 1
         self.sent += 1
         robot, data = self.side.robot, self.side.data
         angles = data.qpos[robot.qpos_address][self.front_right]
@@ -163,7 +174,10 @@ class ThesisServer:
             "wall time [s]": time.perf_counter() - started,
             "foreign [count]": foreign,
             **{f"dropped {reason} [count]": count for reason, count in self.dropped.items()},
+            "divergences [count]": self.divergences,
         }
+        if self.divergence is not None:
+            summary["error"] = self.divergence
         if self.folder is not None:
             (self.folder / "timing.json").write_text(json.dumps(jsonable(summary), indent=2))
             write_run_description(self.folder, self.side.robot, summary)
