@@ -22,9 +22,7 @@ from conftest import (
     run_rig,
 )
 from pneumaquad.control.pid import (
-    C_DERIVATIVE,
-    C_INTEGRAL,
-    N_CONTROLLER_STATES,
+    new_pid_state,
     pid_gains,
     pid_update,
 )
@@ -399,48 +397,48 @@ def gains(kp=0.0, ki=0.0, kd=0.0, tau=0.0, limit=2.0, umin=0.0, umax=10.0):
 
 def test_pid_integral_clamped_to_limit() -> None:
     g = gains(ki=100.0, limit=2.0)
-    state = np.zeros(N_CONTROLLER_STATES)
+    state = new_pid_state()
     outputs = [pid_update(g, state, 0.01, 0.0, DT) for _ in range(3000)]
     assert outputs[0] == pytest.approx(5.25 + 100.0 * 0.01 * DT)
-    assert state[C_INTEGRAL] == 2.0
+    assert state["integral"] == 2.0
     assert outputs[-1] == 7.25
-    state[:] = 0.0
+    state = new_pid_state()
     outputs = [pid_update(g, state, -0.01, 0.0, DT) for _ in range(3000)]
-    assert state[C_INTEGRAL] == -2.0 and outputs[-1] == 3.25
+    assert state["integral"] == -2.0 and outputs[-1] == 3.25
 
 
 def test_pid_output_saturated() -> None:
     g = gains(kp=1e4)
-    assert pid_update(g, np.zeros(N_CONTROLLER_STATES), 0.01, 0.0, DT) == 10.0
-    assert pid_update(g, np.zeros(N_CONTROLLER_STATES), -0.01, 0.0, DT) == 0.0
+    assert pid_update(g, new_pid_state(), 0.01, 0.0, DT) == 10.0
+    assert pid_update(g, new_pid_state(), -0.01, 0.0, DT) == 0.0
 
 
 def test_pid_no_integral_windup_while_saturated() -> None:
     g = gains(kp=1000.0, ki=50.0, limit=4.0)
-    state = np.zeros(N_CONTROLLER_STATES)
+    state = new_pid_state()
     for _ in range(2000):  # 2 s pushing into the upper limit
         assert pid_update(g, state, 0.01, 0.0, DT) == 10.0
-    assert state[C_INTEGRAL] == 0.0
+    assert state["integral"] == 0.0
     # the output leaves saturation as soon as the error allows: no wound-up integral
     u = pid_update(g, state, 0.001, 0.0, DT)
     assert u == pytest.approx(5.25 + 1.0 + 50.0 * 0.001 * DT)
     # saturated high but with the error reversed, the integral may unwind
     g = gains(ki=100.0, limit=2.0, umax=7.0)
-    state = np.zeros(N_CONTROLLER_STATES)
-    state[C_INTEGRAL] = 2.0
+    state = new_pid_state()
+    state["integral"] = 2.0
     assert pid_update(g, state, -0.01, 0.0, DT) == 7.0
-    assert state[C_INTEGRAL] == pytest.approx(2.0 - 100.0 * 0.01 * DT)
+    assert state["integral"] == pytest.approx(2.0 - 100.0 * 0.01 * DT)
 
 
 def test_pid_derivative_on_measurement() -> None:
     kp, kd, tau = 300.0, 3.0, 5e-3
     with_d, without_d = gains(kp=kp, kd=kd, tau=tau), gains(kp=kp, tau=tau)
-    a, b = np.zeros(N_CONTROLLER_STATES), np.zeros(N_CONTROLLER_STATES)
+    a, b = new_pid_state(), new_pid_state()
     for reference in (0.02, 0.02, 0.03, 0.01, 0.01):  # reference steps, measurement fixed
         u = pid_update(with_d, a, reference, 0.02, DT)
         assert u == pid_update(without_d, b, reference, 0.02, DT)  # no derivative kick
         assert u == pytest.approx(5.25 + kp * (reference - 0.02))
-    assert a[C_DERIVATIVE] == 0.0
+    assert a["measurement_rate"] == 0.0
     # a measurement step enters through the filtered rate: -Kd·(dt/(tau+dt))·dy/dt
     step = 1e-3
     u = pid_update(with_d, a, 0.01, 0.02 + step, DT)

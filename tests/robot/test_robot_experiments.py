@@ -13,7 +13,6 @@ from typer.testing import CliRunner
 
 from conftest import CLI, interrupt_when_recording
 from pneumaquad.cli import app
-from pneumaquad.control.pid import G_KD, G_KI, G_KP
 from pneumaquad.params import load_robot
 from pneumaquad.recording import read_recording
 from pneumaquad.robot.builder import build_robot
@@ -38,7 +37,9 @@ def _alpha_step_overshoot(force_gain: float) -> float:
     pose = np.tile(np.radians([0.0, -30.0, 60.0]), 4)
     sim.set_pose(pose)
     sim.command_angles(pose)
-    sim.gains[:, G_KP], sim.gains[:, G_KI], sim.gains[:, G_KD] = 150.0, 0.0, 3.0
+    sim.gains["proportional_gain"] = 150.0
+    sim.gains["integral_gain"] = 0.0
+    sim.gains["derivative_gain"] = 3.0
     sim.joint_control["force_feedback_gain"] = force_gain
     sim.step(1000)
     target = pose.copy()

@@ -30,7 +30,7 @@ from pneumaquad import layout
 from pneumaquad.actuator import supply_state
 from pneumaquad.analysis import find_steps
 from pneumaquad.analysis.filters import sample_rate_of
-from pneumaquad.control.pid import N_CONTROLLER_STATES
+from pneumaquad.control.pid import new_pid_state
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.physics.chamber import chamber_volume_cap, chamber_volume_rod
 from pneumaquad.physics.valve import centered_voltage
@@ -244,7 +244,7 @@ def _simulate_from(
         state,
         supply_state(setup.actuator),
         rig_controller_gains(setup),
-        np.zeros(N_CONTROLLER_STATES),
+        new_pid_state(),
         False,
         np.ascontiguousarray(command, dtype=float),
         0,

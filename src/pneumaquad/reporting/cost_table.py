@@ -31,7 +31,7 @@ import numba
 import numpy as np
 
 from pneumaquad.actuator import supply_state
-from pneumaquad.control.pid import N_CONTROLLER_STATES
+from pneumaquad.control.pid import new_pid_state
 from pneumaquad.conversions import METRE_PER_INCH
 from pneumaquad.params import RigSetup, load_rig
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
@@ -153,7 +153,7 @@ def time_rig_run(
     state = rig_initial_state(setup, params)
     supply = supply_state(setup.actuator)
     gains = rig_controller_gains(setup)
-    controller = np.zeros(N_CONTROLLER_STATES)
+    controller = new_pid_state()
     records, rows = new_rows(signal.shape[0])
     sim = setup.simulation
     start = time.perf_counter()

@@ -34,6 +34,6 @@ def rig_initial_state(setup: RigSetup, params: np.ndarray) -> np.ndarray:
     return state[np.newaxis, :]
 
 
-def rig_controller_gains(setup: RigSetup) -> np.ndarray:
+def rig_controller_gains(setup: RigSetup) -> np.void:
     """PID gains of the rig's parameter file, with the valve's offset and range."""
     return controller_gains(setup.controller, setup.actuator.valve)

@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 
 from pneumaquad import layout
 from pneumaquad.actuator import supply_state
-from pneumaquad.control.pid import N_CONTROLLER_STATES, pid_update
+from pneumaquad.control.pid import new_pid_state, pid_update
 from pneumaquad.interruption import deferred_interrupt
 from pneumaquad.jit import compiled
 from pneumaquad.kernel import rig_rates, step_rigs
@@ -300,7 +300,7 @@ def simulate_rig(
     state = rig_initial_state(setup, params)
     supply = supply_state(setup.actuator)
     gains = rig_controller_gains(setup)
-    controller = np.zeros(N_CONTROLLER_STATES)
+    controller = new_pid_state()
     total = int(signal.shape[0])
     records, rows = new_rows(total)
     dt = setup.simulation.control_step
@@ -448,7 +448,7 @@ def simulate_rig_reference(
     y = rig_initial_state(setup, params)[0].copy()
     supply = supply_state(setup.actuator)
     gains = rig_controller_gains(setup)
-    controller = np.zeros(N_CONTROLLER_STATES)
+    controller = new_pid_state()
     dt = setup.simulation.control_step
     rtol = setup.simulation.relative_tolerance
     state_scales = _tolerance_scales(params)

@@ -29,16 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pneumaquad.control.pid import (
-    C_INTEGRAL,
-    G_KD,
-    G_KI,
-    G_KP,
-    G_UMAX,
-    G_UMIN,
-    N_GAINS,
-    pid_update,
-)
+from pneumaquad.control.pid import PID_GAINS_DTYPE, pid_update
 from pneumaquad.jit import compiled
 from pneumaquad.kernel import step_actuators
 from pneumaquad.layout import (
@@ -125,10 +116,10 @@ class ActuatorArrays(NamedTuple):
 class Controllers(NamedTuple):
     """Per joint: PID gains and memory, settings (JOINT_CONTROL_DTYPE) and references."""
 
-    gains: np.ndarray  # (N, N_GAINS), pneumaquad.control.pid
+    gains: np.ndarray  # PID_GAINS_DTYPE, pneumaquad.control.pid
     gain_scale: np.ndarray  # factor on Kp, Ki, Kd [-]
     settings: np.ndarray  # JOINT_CONTROL_DTYPE
-    pid_state: np.ndarray  # (N, N_CONTROLLER_STATES)
+    pid_state: np.ndarray  # PID_STATE_DTYPE
     force_reference: np.ndarray  # force mean or set-point [N]
     reference_angles: np.ndarray  # [rad]
     open_loop_voltage: np.ndarray  # [V]
@@ -258,26 +249,30 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
     control_settings = controllers.settings
     dt = settings.control_step
     count = params.shape[0]
-    scaled = np.empty(N_GAINS)
+    scaled = np.empty(1, PID_GAINS_DTYPE)[0]
     for i in range(count):
         stroke = params[i, P_STROKE]
         joint = control_settings[i]
         if joint.mode == MODE_CLOSED_LOOP:
             target = piston_from_angle(cylinders.linkage[i], controllers.reference_angles[i])
             reference_positions[i] = min(max(target, 0.0), stroke)
-            for k in range(N_GAINS):
-                scaled[k] = controllers.gains[i, k]
+            gains = controllers.gains[i]
             scale = controllers.gain_scale[i]
-            scaled[G_KP] *= scale
-            scaled[G_KI] *= scale
-            scaled[G_KD] *= scale
+            scaled.proportional_gain = gains.proportional_gain * scale
+            scaled.integral_gain = gains.integral_gain * scale
+            scaled.derivative_gain = gains.derivative_gain * scale
+            scaled.derivative_filter_time_constant = gains.derivative_filter_time_constant
+            scaled.integral_limit = gains.integral_limit
+            scaled.offset_voltage = gains.offset_voltage
+            scaled.min_voltage = gains.min_voltage
+            scaled.max_voltage = gains.max_voltage
             tracking = joint.force_tracking_gain
             if tracking > 0.0:
-                scaled[G_KP] *= joint.force_stiffness
-                scaled[G_KD] *= joint.force_stiffness
-                scaled[G_KI] = 0.0
-            if scaled[G_KI] == 0.0:
-                controllers.pid_state[i, C_INTEGRAL] = 0.0
+                scaled.proportional_gain *= joint.force_stiffness
+                scaled.derivative_gain *= joint.force_stiffness
+                scaled.integral_gain = 0.0
+            if scaled.integral_gain == 0.0:
+                controllers.pid_state[i].integral = 0.0
             voltage = pid_update(
                 scaled, controllers.pid_state[i], reference_positions[i], positions[i], dt
             )
@@ -287,7 +282,7 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
             if force_gain > 0.0:
                 voltage += force_gain * (controllers.force_reference[i]
                                          - outputs[i, O_PNEUMATIC_FORCE])
-                voltage = min(max(voltage, scaled[G_UMIN]), scaled[G_UMAX])
+                voltage = min(max(voltage, scaled.min_voltage), scaled.max_voltage)
             commands[i] = voltage
         elif joint.mode == MODE_OPEN_LOOP:
             reference_positions[i] = positions[i]

@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from pneumaquad.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.control.pid import N_CONTROLLER_STATES, controller_gains
+from pneumaquad.control.pid import PID_GAINS_DTYPE, controller_gains, new_pid_state
 from pneumaquad.gait.stability import STANCE_FORCE
 from pneumaquad.layout import (
     N_OUTPUTS,
@@ -201,7 +201,8 @@ class RobotSimulation:
         self.seal = np.array([seal_friction_row(a) for a in actuators], dtype=SEAL_DTYPE)
         controllers = [getattr(p.controller, t) for t in robot.joint_types]
         self.gains = np.array(
-            [controller_gains(c, a.valve) for c, a in zip(controllers, actuators, strict=True)]
+            [controller_gains(c, a.valve) for c, a in zip(controllers, actuators, strict=True)],
+            dtype=PID_GAINS_DTYPE,
         )
         self.base_gain_scale = np.array([c.gain_scale for c in controllers])
         self.gain_scale = self.base_gain_scale.copy()
@@ -210,7 +211,7 @@ class RobotSimulation:
         self.joint_control["force_feedback_time_constant"] = [
             c.force_feedback_time_constant for c in controllers]
         self.joint_control["mode"] = MODE_UNCOMMANDED
-        self.pid_state = np.zeros((n, N_CONTROLLER_STATES))
+        self.pid_state = new_pid_state(n)
         self.force_reference = np.zeros(n)
         self.reference_angles = np.zeros(n)
         self.open_loop_voltage = self.params[:, P_OFFSET].copy()
