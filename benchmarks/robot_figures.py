@@ -58,6 +58,8 @@ from pneumaquad import layout
 from pneumaquad.actuator import initial_state, pack_parameters, supply_state
 from pneumaquad.kernel import step_actuators
 from pneumaquad.layout import P_PATM, P_PE, P_PS
+from pneumaquad.locomotion.stance_control import StanceControlSettings, track_stance_loads
+from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.params import load_actuator, load_robot
 from pneumaquad.recording import read_recording
 from pneumaquad.robot.builder import build_robot
@@ -65,8 +67,6 @@ from pneumaquad.robot.experiment import run_phases
 from pneumaquad.robot.linkage import moment_arm
 from pneumaquad.robot.scenarios import STANDING_ANGLES, leg_validation_phases, standing_height
 from pneumaquad.robot.simulation import RobotSimulation
-from pneumaquad.robot.stance_control import StanceControlSettings, track_stance_loads
-from pneumaquad.robot.walking import WALKING_ANGLES
 
 POSTURE_DEG = (0.0, -30.0, 60.0)
 POSE = np.tile(np.radians(POSTURE_DEG), 4)
@@ -417,7 +417,7 @@ def feet() -> None:
 
 
 def crawl() -> None:
-    from pneumaquad.robot.walking import (
+    from pneumaquad.locomotion.walking import (
         WalkSettings,
         tip_over_series,
         walking_outcome,
@@ -560,7 +560,7 @@ def walk(folder: Path) -> None:
 
 # --- profile ----------------------------------------------------------------------------
 def profile() -> None:
-    from pneumaquad.robot.walking import WalkSettings, walking_phases
+    from pneumaquad.locomotion.walking import WalkSettings, walking_phases
 
     _simulation(configuration="quadruped").step(1)  # compile (or load) the stepping loop
     sim = _simulation(configuration="quadruped")

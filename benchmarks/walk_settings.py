@@ -3,7 +3,7 @@
 Every setting walks 0.5 m on flat ground at 15, 20 and 25 mm/s (single walks differ by a
 few points, so each setting is walked at three speeds), with the defaults of
 ``pneumaquad robot walk`` otherwise. Each walk is judged by
-:func:`pneumaquad.robot.walking.walking_outcome`; the script prints one line per walk and,
+:func:`pneumaquad.locomotion.walking.walking_outcome`; the script prints one line per walk and,
 per setting, the means over the speeds and the number of successes. The planned travel is
 whole gait cycles (8 s cycles: 0.6, 0.64 and 0.6 m at the three speeds), so "travelled /
 0.5 m" of a walk that follows its plan is about 1.2-1.3.
@@ -25,9 +25,9 @@ Settings (``--settings``, default: all, in this order):
 
 The stiffness factor and the start-up cycle are not CLI options: ``pneumaquad robot walk``
 always plans the start-up cycle and uses the stiffness factor 2. This script sets the
-stiffness through :class:`pneumaquad.robot.stance_control.StanceControlSettings` and, for
+stiffness through :class:`pneumaquad.locomotion.stance_control.StanceControlSettings` and, for
 the rows without the start-up cycle, plans the gait with ``start_up=False`` (it wraps the
-gait constructor :func:`pneumaquad.robot.walking.walking_phases` calls); everything else is
+gait constructor :func:`pneumaquad.locomotion.walking.walking_phases` calls); everything else is
 the code path of the CLI.
 
 Run: ``.venv/bin/python benchmarks/walk_settings.py [--settings defaults position ...]
@@ -47,14 +47,14 @@ from typing import Any
 
 import numpy as np
 
-import pneumaquad.robot.walking as walking_module
-from pneumaquad.gait.walk import robot_gait
+import pneumaquad.locomotion.walking as walking_module
+from pneumaquad.locomotion.stance_control import StanceControlSettings
+from pneumaquad.locomotion.walk import robot_gait
+from pneumaquad.locomotion.walking import WalkSettings, tip_over_series, walking_outcome
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.experiment import run_phases
 from pneumaquad.robot.simulation import RobotSimulation
-from pneumaquad.robot.stance_control import StanceControlSettings
-from pneumaquad.robot.walking import WalkSettings, tip_over_series, walking_outcome
 
 DISTANCE = 0.5
 SPEEDS = (0.015, 0.02, 0.025)

@@ -259,18 +259,18 @@ def robot_walk(
     stance_control: Annotated[bool, typer.Option(
         "--stance-control/--no-stance-control",
         help="Force-controlled stance: each stance leg's cylinders track the load "
-             "statics gives it (robot.stance_control); off: plain position control.")]
+             "statics gives it (locomotion.stance_control); off: plain position control.")]
     = True,
     force_gain: Annotated[float, typer.Option(
         callback=_within(1e-6, 1.0, "V/N"),
         help="Force tracking gain of the stance cylinders [V/N], 1e-6 to 1.")] = 0.015,
     swing_from_ground: Annotated[bool, typer.Option(
         "--swing-from-ground/--swing-from-body",
-        help="Swing height above the ground at lift-off (robot.swing_control), or "
+        help="Swing height above the ground at lift-off (locomotion.swing_control), or "
              "relative to the body as planned.")] = True,
     heading_hold: Annotated[bool, typer.Option(
         "--heading-hold/--no-heading-hold",
-        help="Hold the initial heading (robot.heading_control).")] = True,
+        help="Hold the initial heading (locomotion.heading_control).")] = True,
     environment: EnvironmentOption = "flat",
     seed: SeedOption = 0,
     params: RobotParamsOption = "crr-quadruped",
@@ -283,8 +283,8 @@ def robot_walk(
     import json
     import math
 
-    from pneumaquad.robot.stance_control import StanceControlSettings
-    from pneumaquad.robot.walking import WalkSettings, walking_outcome, walking_phases
+    from pneumaquad.locomotion.stance_control import StanceControlSettings
+    from pneumaquad.locomotion.walking import WalkSettings, walking_outcome, walking_phases
 
     _check_environment(environment)
     if distance / speed > MAX_SIMULATED_TIME:
@@ -314,9 +314,9 @@ def robot_walk(
                                  ) from None
     folder = _run(simulation, phases, output, f"walk-{environment}",
                   f"quadruped: walk {distance:g} m on {environment}", video)
+    from pneumaquad.locomotion.walking import tip_over_series
     from pneumaquad.recording import read_recording
     from pneumaquad.robot.plots import plot_walking
-    from pneumaquad.robot.walking import tip_over_series
 
     summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
     recording = read_recording(folder)

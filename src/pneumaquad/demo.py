@@ -90,7 +90,7 @@ def run_demo(folder: Path, progress: Callable[[int, int], None] | None = None) -
     folder.mkdir(parents=True, exist_ok=True)
     report = DemoReport(folder)
     from pneumaquad.demo_reports import REPORT_SECTIONS
-    from pneumaquad.robot.demo_sections import ROBOT_SECTIONS
+    from pneumaquad.demo_sections import ROBOT_SECTIONS
 
     steps = [
         _open_loop_steps, _spacer, _tracking, _stiction, _reference_solver, _tank,

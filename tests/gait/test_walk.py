@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pneumaquad.gait.crawl import LEGS, foot_targets, plan_margins
-from pneumaquad.gait.walk import (
+from pneumaquad.locomotion.walk import (
     plan_walk,
     robot_gait,
     solve_cycle,

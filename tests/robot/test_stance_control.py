@@ -6,12 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pneumaquad.robot.stance_control import (
+from pneumaquad.locomotion.stance_control import (
     cylinder_forces_for_foot_force,
     desired_normal_forces,
     load_shares,
 )
-from pneumaquad.robot.walking import contact_slide, gait_support_margins
+from pneumaquad.locomotion.walking import contact_slide, gait_support_margins
 
 FEET = np.array([[0.3, 0.25], [0.3, -0.25], [-0.3, 0.25], [-0.3, -0.25]])
 

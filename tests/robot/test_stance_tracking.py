@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pneumaquad.locomotion.stance_control import track_stance_loads
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.simulation import RobotSimulation
-from pneumaquad.robot.stance_control import track_stance_loads
 
 
 def _stand_with_a_leg_length_error(error_degrees: float, shares: np.ndarray | None,

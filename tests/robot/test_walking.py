@@ -8,18 +8,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumaquad.gait.walk import robot_gait
-from pneumaquad.params import load_robot
-from pneumaquad.robot.builder import build_robot
-from pneumaquad.robot.experiment import run_phases
-from pneumaquad.robot.simulation import RobotSimulation
-from pneumaquad.robot.walking import (
+from pneumaquad.locomotion.walk import robot_gait
+from pneumaquad.locomotion.walking import (
     WALKING_ANGLES,
     WalkSettings,
     tip_over_series,
     walking_outcome,
     walking_phases,
 )
+from pneumaquad.params import load_robot
+from pneumaquad.robot.builder import build_robot
+from pneumaquad.robot.experiment import run_phases
+from pneumaquad.robot.simulation import RobotSimulation
 
 
 def test_one_gait_cycle_moves_the_robot_forward_without_a_fall(tmp_path: Path) -> None:
@@ -62,7 +62,7 @@ def test_one_gait_cycle_moves_the_robot_forward_without_a_fall(tmp_path: Path) -
 def test_stance_control_sets_forces_every_chunk_for_the_stance_legs_only(
         tmp_path: Path) -> None:
     from pneumaquad.gait.crawl import LEGS
-    from pneumaquad.robot.stance_control import StanceController
+    from pneumaquad.locomotion.stance_control import StanceController
 
     sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
     settings = WalkSettings(period=4.0, distance=0.05)  # stance control on by default
@@ -130,7 +130,7 @@ def test_swing_height_from_the_ground_lifts_the_feet_higher(tmp_path: Path) -> N
 def test_heading_hold_turns_the_standing_body_towards_the_heading() -> None:
     # Stance feet held by the ground, commanded rotated by +c: the body turns by -c.
     from pneumaquad.console.app import initial_pose
-    from pneumaquad.robot.heading_control import HeadingHold
+    from pneumaquad.locomotion.heading_control import HeadingHold
     from pneumaquad.robot.recording import thorax_attitude
 
     sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))

@@ -1,5 +1,5 @@
 """The quadruped walks each terrain of the issue with the default gait (slow: 1-2 minutes of
-simulation each). Success is judged by :func:`pneumaquad.robot.walking.walking_outcome`:
+simulation each). Success is judged by :func:`pneumaquad.locomotion.walking.walking_outcome`:
 no fall, static margin negative less than 5 % of the time, stance feet sliding less than
 10 cm per metre, no joint stuck at a limit, at least 90 % of the distance."""
 
@@ -9,16 +9,16 @@ from pathlib import Path
 
 import pytest
 
-from pneumaquad.params import load_robot
-from pneumaquad.robot.builder import build_robot
-from pneumaquad.robot.experiment import run_phases
-from pneumaquad.robot.simulation import RobotSimulation
-from pneumaquad.robot.walking import (
+from pneumaquad.locomotion.walking import (
     WalkSettings,
     tip_over_series,
     walking_outcome,
     walking_phases,
 )
+from pneumaquad.params import load_robot
+from pneumaquad.robot.builder import build_robot
+from pneumaquad.robot.experiment import run_phases
+from pneumaquad.robot.simulation import RobotSimulation
 
 
 @pytest.mark.slow

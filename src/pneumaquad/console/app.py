@@ -25,13 +25,13 @@ import numpy as np
 import viser
 
 from pneumaquad.layout import P_PATM, P_PS
+from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.feedback import FootFeedback, foot_feedback
 from pneumaquad.robot.scenarios import standing_height
 from pneumaquad.robot.simulation import RobotSimulation
-from pneumaquad.robot.walking import WALKING_ANGLES
 
 from .devices import DeviceLink, DeviceServer
 from .gui import ConsoleControls
@@ -49,7 +49,7 @@ _DROP_CLEARANCE = 0.003
 def initial_pose(simulation: RobotSimulation) -> np.ndarray:
     """Put ``simulation`` in the console's reset pose; return its joint angles [rad].
 
-    Every leg at the walking angles of :mod:`pneumaquad.robot.walking` (the neutral
+    Every leg at the walking angles of :mod:`pneumaquad.locomotion.walking` (the neutral
     stance of the crawl, with room to step and sway); a free robot is placed with its
     feet just above flat ground; all joints closed-loop at that pose.
     """

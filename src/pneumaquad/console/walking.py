@@ -15,7 +15,7 @@ duration, refusing a lift that the *measured* state would not support
 has on the ground and the whole robot's measured centre of mass), commands all twelve
 joints through the leg IK (clamped into the limits) and, like the CLI walk, sets the
 stance legs' cylinders to carry their statics share of the weight
-(:func:`pneumaquad.robot.stance_control.track_stance_loads` with the crawl's
+(:func:`pneumaquad.locomotion.stance_control.track_stance_loads` with the crawl's
 :meth:`~pneumaquad.gait.online.OnlineCrawl.load_shares`: a leg sheds its load before it
 lifts). The feet are planned in world-aligned axes and turned into the body frame with
 the thorax's measured yaw.
@@ -30,14 +30,14 @@ import numpy as np
 from pneumaquad.gait.crawl import LEGS, refuse_lift
 from pneumaquad.gait.online import OnlineCrawl, OnlineCrawlSettings
 from pneumaquad.gait.stability import centre_of_mass
-from pneumaquad.gait.walk import standing_feet, thorax_rotation
+from pneumaquad.locomotion.stance_control import StanceControlSettings, track_stance_loads
+from pneumaquad.locomotion.walk import standing_feet, thorax_rotation
+from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.robot.kinematics import DHTable, foot_jacobian, forward_kinematics_dh
 from pneumaquad.robot.leg_ik import exact_solutions
 from pneumaquad.robot.legs import leg_dh_table
 from pneumaquad.robot.recording import thorax_attitude
 from pneumaquad.robot.simulation import RobotSimulation
-from pneumaquad.robot.stance_control import StanceControlSettings, track_stance_loads
-from pneumaquad.robot.walking import WALKING_ANGLES
 
 __all__ = ["WALKING_MODES", "ConsoleWalking", "reach"]
 

@@ -309,7 +309,7 @@ class OnlineCrawl:
 
     def load_shares(self, unload_time: float = 0.4, load_time: float = 0.08) -> Array:
         """(4,) share in [0, 1] of the load each leg should carry now (for a force-controlled
-        stance, :func:`pneumaquad.robot.stance_control.track_stance_loads`): 0 for the
+        stance, :func:`pneumaquad.locomotion.stance_control.track_stance_loads`): 0 for the
         swinging leg; the leg about to lift sheds its load over the last ``unload_time``
         [s] of the shift before it; the leg that just touched down takes load over the
         first ``load_time`` [s] of the next shift."""

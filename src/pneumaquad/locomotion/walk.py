@@ -18,11 +18,7 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
-from ..robot.builder import RobotModel
-from ..robot.frames import euler_zyx_matrix, rotation_to_quaternion
-from ..robot.legs import leg_dh_table, solve_leg, thorax_frame_points
-from ..robot.scenarios import STANDING_ANGLES
-from .crawl import (
+from pneumaquad.gait.crawl import (
     LEGS,
     CrawlGait,
     foot_targets,
@@ -30,7 +26,11 @@ from .crawl import (
     stance_flags,
     sway_for_margin,
 )
-from .stability import centre_of_mass, stability_margin, support_polygon
+from pneumaquad.gait.stability import centre_of_mass, stability_margin, support_polygon
+from pneumaquad.robot.builder import RobotModel
+from pneumaquad.robot.frames import euler_zyx_matrix, rotation_to_quaternion
+from pneumaquad.robot.legs import leg_dh_table, solve_leg, thorax_frame_points
+from pneumaquad.robot.scenarios import STANDING_ANGLES
 
 __all__ = ["CycleSolution", "WalkPlan", "plan_walk", "robot_gait", "solve_cycle",
            "standing_feet", "thorax_rotation"]

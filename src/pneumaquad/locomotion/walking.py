@@ -18,13 +18,13 @@ from typing import Any
 import numpy as np
 
 from pneumaquad.gait.stability import STANCE_FORCE, support_and_margin
-from pneumaquad.gait.walk import WalkPlan, plan_walk, robot_gait
+from pneumaquad.locomotion.walk import WalkPlan, plan_walk, robot_gait
+from pneumaquad.robot.builder import RobotModel
+from pneumaquad.robot.experiment import Phase
+from pneumaquad.robot.scenarios import stand_up_phases
+from pneumaquad.robot.simulation import RobotSimulation
 
-from .builder import RobotModel
-from .experiment import Phase
 from .heading_control import HeadingHold
-from .scenarios import stand_up_phases
-from .simulation import RobotSimulation
 from .stance_control import StanceController, StanceControlSettings
 from .swing_control import SwingHeightCorrection
 

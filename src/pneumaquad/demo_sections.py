@@ -9,12 +9,11 @@ from typing import Any, Protocol
 import numpy as np
 
 from pneumaquad.params import load_robot
-
-from .builder import build_robot
-from .experiment import run_phases
-from .plots import plot_body, plot_joints
-from .scenarios import foot_cycle_phases, leg_validation_phases, stand_up_phases
-from .simulation import RobotSimulation
+from pneumaquad.robot.builder import build_robot
+from pneumaquad.robot.experiment import run_phases
+from pneumaquad.robot.plots import plot_body, plot_joints
+from pneumaquad.robot.scenarios import foot_cycle_phases, leg_validation_phases, stand_up_phases
+from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["ROBOT_SECTIONS"]
 
@@ -37,7 +36,7 @@ def _stand(folder: Path, report: Report) -> None:
               "Quadruped standing up on 12 pneumatic joints")
     figure = folder / "robot-stand" / "body.png"
     try:
-        from .video import RenderingUnavailableError, render_run_video
+        from pneumaquad.robot.video import RenderingUnavailableError, render_run_video
 
         files = render_run_video(folder / "robot-stand", fps=20, width=480, height=360,
                                  max_seconds=None)
@@ -119,10 +118,14 @@ def _foot_cycle(folder: Path, report: Report) -> None:
 
 
 def _walk(folder: Path, report: Report) -> None:
+    from pneumaquad.locomotion.walking import (
+        WalkSettings,
+        tip_over_series,
+        walking_outcome,
+        walking_phases,
+    )
     from pneumaquad.recording import write_summary
-
-    from .plots import plot_walking
-    from .walking import WalkSettings, tip_over_series, walking_outcome, walking_phases
+    from pneumaquad.robot.plots import plot_walking
 
     simulation = _simulation("quadruped")
     settings = WalkSettings(distance=0.32)  # two 8 s cycles at 20 mm/s

@@ -34,10 +34,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from pneumaquad.gait.crawl import CrawlGait, leg_phases
 from pneumaquad.gait.stability import centre_of_mass
-
-from .feedback import foot_jacobian_world, leg_dof_addresses
-from .linkage import moment_arm
-from .simulation import RobotSimulation
+from pneumaquad.robot.feedback import foot_jacobian_world, leg_dof_addresses
+from pneumaquad.robot.linkage import moment_arm
+from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["StanceControlSettings", "StanceController", "cylinder_forces_for_foot_force",
            "desired_normal_forces", "load_shares", "track_stance_loads"]

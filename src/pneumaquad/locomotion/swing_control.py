@@ -22,10 +22,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pneumaquad.gait.crawl import CrawlGait, foot_positions_ground, stance_flags
-
-from .kinematics import forward_kinematics_dh
-from .legs import leg_dh_table, shift_feet
-from .simulation import RobotSimulation
+from pneumaquad.robot.kinematics import forward_kinematics_dh
+from pneumaquad.robot.legs import leg_dh_table, shift_feet
+from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["SwingHeightCorrection"]
 

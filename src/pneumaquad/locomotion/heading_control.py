@@ -17,12 +17,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from pneumaquad.gait.walk import thorax_rotation
-
-from .kinematics import forward_kinematics_dh
-from .legs import leg_dh_table, shift_feet
-from .recording import thorax_attitude
-from .simulation import RobotSimulation
+from pneumaquad.locomotion.walk import thorax_rotation
+from pneumaquad.robot.kinematics import forward_kinematics_dh
+from pneumaquad.robot.legs import leg_dh_table, shift_feet
+from pneumaquad.robot.recording import thorax_attitude
+from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["HeadingHold"]
 
