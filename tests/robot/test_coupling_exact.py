@@ -40,6 +40,7 @@ from pneumaquad.params import load_robot
 from pneumaquad.physics.chamber import chamber_volume_cap, chamber_volume_rod
 from pneumaquad.robot.builder import RobotModel, build_robot
 from pneumaquad.robot.coupling import piston_from_angle
+from pneumaquad.robot.feedback import tibia_body_legs
 from pneumaquad.robot.simulation import RobotSimulation
 
 POSE = np.tile(np.radians((0.0, -30.0, 60.0)), 4)
@@ -266,8 +267,7 @@ def test_contact_forces_between_chunks_are_those_of_the_present_contacts() -> No
         model, data = simulation.model, check
         expected = np.zeros(4)
         wrench = np.zeros(6)
-        tibia = {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
-                 for index, leg in enumerate(simulation.robot.legs)}
+        tibia = tibia_body_legs(simulation.robot)
         for index in range(data.ncon):
             contact = data.contact[index]
             for body in (model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2]):

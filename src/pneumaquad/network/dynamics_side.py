@@ -53,8 +53,14 @@ from pneumaquad.robot.builder import RobotModel
 from pneumaquad.robot.coupling import set_seal_friction
 from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.linkage import moment_arm
-from pneumaquad.robot.simulation import RobotSimulation, unstable_quantities
-from pneumaquad.robot.stepping import UNSTABLE_WARNINGS
+from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.stepping import (
+    UNSTABLE_WARNINGS,
+    begin_step,
+    bring_to_present,
+    complete_step,
+    unstable_quantities,
+)
 
 __all__ = ["COMMAND_KINDS", "DynamicsSide", "piston_readout"]
 
@@ -224,11 +230,11 @@ class DynamicsSide:
         if self.command_kind == "valve":
             self.simulation.step(1)
             return
-        model, data, robot = self.model, self.data, self.robot
+        data, robot = self.data, self.robot
         coupling = self.simulation.coupling
         before = data.warning.number[UNSTABLE_WARNINGS].copy()
-        if coupling["fresh"][0] == 0:
-            mujoco.mj_step1(model, data)
+        stepper = self.simulation.stepper
+        begin_step(stepper, coupling)  # (done by the last step, which the STATE reported)
         if self.command_kind == "force":
             data.ctrl[robot.actuator_id] = self.command
             # The function robot_control_step uses, so both sides agree bit for bit.
@@ -237,19 +243,8 @@ class DynamicsSide:
         else:
             data.ctrl[robot.actuator_id] = 0.0
             data.qfrc_applied[robot.dof_address] = self.command
-        if model.opt.integrator == mujoco.mjtIntegrator.mjINT_RK4:
-            mujoco.mj_step(model, data)  # mj_step2 does not integrate RK4
-        else:
-            mujoco.mj_step2(model, data)
-        for _ in range(self.physics_steps - 1):
-            mujoco.mj_step(model, data)
-        mujoco.mj_step1(model, data)
-        # the force stages too: contact forces read between steps belong to the present
-        # contacts (as in the in-process run; mj_step2 recomputes them)
-        mujoco.mj_fwdActuation(model, data)
-        mujoco.mj_fwdAcceleration(model, data)
-        mujoco.mj_fwdConstraint(model, data)
-        coupling["fresh"] = 1
+        complete_step(stepper, coupling)
+        bring_to_present(stepper, coupling)  # the kinematics and forces of the next STATE
         self.simulation.steps_taken += 1
         if np.any(data.warning.number[UNSTABLE_WARNINGS] != before):
             self.simulation.divergences += 1

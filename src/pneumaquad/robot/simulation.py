@@ -67,6 +67,7 @@ from .stepping import (
     STATUS_MUJOCO,
     MujocoStepper,
     advance_chunk,
+    unstable_quantities,
 )
 
 __all__ = [
@@ -74,7 +75,6 @@ __all__ = [
     "SimulationDivergedError",
     "seal_friction_row",
     "stance_swing_schedule",
-    "unstable_quantities",
 ]
 
 
@@ -133,21 +133,6 @@ def stance_swing_schedule(
 
 
 
-_WARNING_QUANTITIES = {
-    mujoco.mjtWarning.mjWARN_BADQPOS: "joint positions (qpos)",
-    mujoco.mjtWarning.mjWARN_BADQVEL: "joint velocities (qvel)",
-    mujoco.mjtWarning.mjWARN_BADQACC: "joint accelerations (qacc)",
-    mujoco.mjtWarning.mjWARN_BADCTRL: "cylinder forces (ctrl)",
-}
-
-
-def unstable_quantities(data: mujoco.MjData) -> str:
-    """The quantities MuJoCo warned about, e.g. ``"joint accelerations (qacc)"``."""
-    named = [name for warning, name in _WARNING_QUANTITIES.items()
-             if data.warning[warning].number > 0]
-    return " and ".join(named) or "the state"
-
-
 def _bad_actuator_quantity(simulation: RobotSimulation, cylinder: int) -> str:
     """Which of a cylinder's piston and chamber values is not finite."""
     values = {
@@ -180,10 +165,10 @@ class RobotSimulation:
         self.data = mujoco.MjData(self.model)
         p = robot.parameters
         n = robot.joint_count
-        self.control_step = p.simulation.control_step
-        self.substeps = p.simulation.substeps
-        self.physics_steps = p.simulation.physics_steps
-        self.mujoco_friction = p.simulation.seal_friction == "mujoco"
+        self.step_settings = StepSettings(
+            control_step=float(p.simulation.control_step),
+            substeps=int(p.simulation.substeps),
+            mujoco_friction=p.simulation.seal_friction == "mujoco")
         actuators = [robot.actuators[t] for t in robot.joint_types]
         self.params = np.array([pack_parameters(a) for a in actuators])
         first = robot.actuators["alpha"]
@@ -238,13 +223,10 @@ class RobotSimulation:
         self.trace = StepTrace(commands=self.commands, positions=self.positions,
                                velocities=self.velocities,
                                reference_positions=self.reference_positions)
-        self.step_settings = StepSettings(control_step=float(self.control_step),
-                                          substeps=int(self.substeps),
-                                          mujoco_friction=bool(self.mujoco_friction))
         self.stepper = MujocoStepper(
             step_addresses=_step_addresses(self.model), model_address=self.model._address,
             data_address=d._address, warning_counts=d.warning.number,
-            physics_steps=int(self.physics_steps))
+            physics_steps=int(p.simulation.physics_steps))
         self.gain_schedule: GainSchedule | None = None
         self._tibia_leg = {
             mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
@@ -258,6 +240,27 @@ class RobotSimulation:
         self.steps_taken = 0
         self.divergences = 0  # runs of step() that stopped on a diverged state
         self.set_pose(np.clip(np.zeros(n), robot.lower_limits(), robot.upper_limits()))
+
+    # --- settings (held once, in the bundles the compiled step reads) -----------------
+    @property
+    def control_step(self) -> float:
+        """Control step [s]."""
+        return self.step_settings.control_step
+
+    @property
+    def substeps(self) -> int:
+        """Heun substeps of the pneumatic kernel per control step."""
+        return self.step_settings.substeps
+
+    @property
+    def mujoco_friction(self) -> bool:
+        """Whether the seal friction is MuJoCo's dry friction (else the actuator's law)."""
+        return self.step_settings.mujoco_friction
+
+    @property
+    def physics_steps(self) -> int:
+        """MuJoCo steps per control step."""
+        return self.stepper.physics_steps
 
     # --- state -----------------------------------------------------------------------
     @property

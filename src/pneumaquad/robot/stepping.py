@@ -51,9 +51,14 @@ __all__ = [
     "STATUS_MUJOCO",
     "STATUS_OK",
     "UNSTABLE_WARNINGS",
+    "UNSTABLE_WARNING_QUANTITIES",
     "MujocoStepper",
     "advance_chunk",
+    "begin_step",
+    "bring_to_present",
+    "complete_step",
     "mujoco_step_function",
+    "unstable_quantities",
 ]
 
 #: Chunk outcomes returned by :func:`advance_chunk`.
@@ -61,11 +66,22 @@ STATUS_OK = 0
 STATUS_MUJOCO = 1  # MuJoCo warned of a non-finite or huge qpos, qvel, qacc or ctrl
 STATUS_ACTUATOR = 2  # a cylinder's piston or chamber state went non-finite
 
-#: MuJoCo warnings that mean the simulation is unstable (indices into ``data.warning``).
-UNSTABLE_WARNINGS = np.array([
-    int(mujoco.mjtWarning.mjWARN_BADQPOS), int(mujoco.mjtWarning.mjWARN_BADQVEL),
-    int(mujoco.mjtWarning.mjWARN_BADQACC), int(mujoco.mjtWarning.mjWARN_BADCTRL),
-])
+#: MuJoCo warnings that mean the simulation is unstable, and what each is about.
+UNSTABLE_WARNING_QUANTITIES = {
+    mujoco.mjtWarning.mjWARN_BADQPOS: "joint positions (qpos)",
+    mujoco.mjtWarning.mjWARN_BADQVEL: "joint velocities (qvel)",
+    mujoco.mjtWarning.mjWARN_BADQACC: "joint accelerations (qacc)",
+    mujoco.mjtWarning.mjWARN_BADCTRL: "cylinder forces (ctrl)",
+}
+#: The same warnings as indices into ``data.warning`` (for the compiled loop).
+UNSTABLE_WARNINGS = np.array([int(warning) for warning in UNSTABLE_WARNING_QUANTITIES])
+
+
+def unstable_quantities(data: mujoco.MjData) -> str:
+    """The quantities MuJoCo warned about, e.g. ``"joint accelerations (qacc)"``."""
+    named = [name for warning, name in UNSTABLE_WARNING_QUANTITIES.items()
+             if data.warning[warning].number > 0]
+    return " and ".join(named) or "the state"
 
 
 def _mujoco_library() -> ctypes.CDLL:
@@ -132,6 +148,40 @@ class MujocoStepper(NamedTuple):
 
 
 @compiled
+def begin_step(stepper: MujocoStepper, coupling) -> None:
+    """``mj_step1`` (kinematics, contacts, velocities of the present state) unless it ran
+    for this state already."""
+    if coupling[0].fresh == 0:
+        _call_step(stepper.step_addresses[0], stepper.model_address, stepper.data_address)
+
+
+@compiled
+def complete_step(stepper: MujocoStepper, coupling) -> None:
+    """The rest of the control step with the inputs set: the second half (``mj_step2``, or
+    ``mj_step`` for RK4) and any further physics steps."""
+    addresses = stepper.step_addresses
+    model, data = stepper.model_address, stepper.data_address
+    _call_step(addresses[1], model, data)
+    for _ in range(stepper.physics_steps - 1):
+        _call_step(addresses[2], model, data)
+    coupling[0].fresh = 0
+
+
+@compiled
+def bring_to_present(stepper: MujocoStepper, coupling) -> None:
+    """``mj_step1`` and MuJoCo's force stages for the present state, unless done already:
+    the contact forces read afterwards are those of the present contacts (``mj_step1``
+    alone leaves the last step's solution in ``efc_force``, indexed by the new contact
+    rows); the next ``mj_step2`` recomputes them anyway."""
+    if coupling[0].fresh == 0:
+        addresses = stepper.step_addresses
+        model, data = stepper.model_address, stepper.data_address
+        for stage in (0, 3, 4, 5):
+            _call_step(addresses[stage], model, data)
+        coupling[0].fresh = 1
+
+
+@compiled
 def advance_chunk(stepper: MujocoStepper, step_count: int, reference_table,
                   reference_start: int, mujoco: MujocoBuffers, cylinders: Cylinders,
                   actuators: ActuatorArrays, controllers: Controllers, trace: StepTrace,
@@ -149,9 +199,6 @@ def advance_chunk(stepper: MujocoStepper, step_count: int, reference_table,
         Control steps completed, status (``STATUS_OK``, ``STATUS_MUJOCO`` or
         ``STATUS_ACTUATOR``) and the cylinder index of an actuator failure (else -1).
     """
-    addresses = stepper.step_addresses
-    step1, step2, full_step = addresses[0], addresses[1], addresses[2]
-    model, data = stepper.model_address, stepper.data_address
     warning_counts = stepper.warning_counts
     baseline = np.empty(UNSTABLE_WARNINGS.shape[0], dtype=np.int64)
     for k in range(UNSTABLE_WARNINGS.shape[0]):
@@ -163,26 +210,15 @@ def advance_chunk(stepper: MujocoStepper, step_count: int, reference_table,
             row = min(reference_start + k, rows - 1)
             for i in range(references.shape[0]):
                 references[i] = reference_table[row, i]
-        if coupling[0].fresh == 0:
-            _call_step(step1, model, data)
+        begin_step(stepper, coupling)
         bad = robot_control_step(mujoco, cylinders, actuators, controllers, trace, coupling,
                                  settings)
         if bad >= 0:
             return k, STATUS_ACTUATOR, bad
-        _call_step(step2, model, data)
-        for _ in range(stepper.physics_steps - 1):
-            _call_step(full_step, model, data)
-        coupling[0].fresh = 0
+        complete_step(stepper, coupling)
         if _unstable(warning_counts, baseline):
             return k + 1, STATUS_MUJOCO, -1
-    if coupling[0].fresh == 0:
-        _call_step(step1, model, data)
-        # the force stages too, so that the contact forces read between chunks are those
-        # of the present contacts (mj_step1 alone leaves the last step's solution in
-        # efc_force, indexed by the new contact rows); step2 recomputes them anyway
-        for stage in range(3, 6):
-            _call_step(addresses[stage], model, data)
-        coupling[0].fresh = 1
+    bring_to_present(stepper, coupling)
     if _unstable(warning_counts, baseline):
         return step_count, STATUS_MUJOCO, -1
     bad = sample_actuators(mujoco, cylinders, actuators, trace, coupling, settings)
