@@ -20,11 +20,11 @@ import numpy as np
 from numba import njit
 
 from _bench import machine_line, stats, table, write_json
-from pneumaquad import layout
+from pneumaquad.core import layout
+from pneumaquad.core.physics.friction import friction_damping
+from pneumaquad.core.physics.valve import input_pressure, polynomial_area, simple_valve_area
+from pneumaquad.core.pneumatics import friction_of
 from pneumaquad.params import RigSetup, load_rig
-from pneumaquad.physics.friction import friction_damping
-from pneumaquad.physics.valve import input_pressure, polynomial_area, simple_valve_area
-from pneumaquad.pneumatics import friction_of
 from pneumaquad.reporting.cost_report import cost_table_markdown
 from pneumaquad.reporting.cost_table import measure_cost_table
 from pneumaquad.rig.model import pack_rig_parameters

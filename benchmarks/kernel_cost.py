@@ -1,4 +1,4 @@
-"""Cost of ``pneumaquad.kernel.step_actuators`` per actuator per 1 ms control step.
+"""Cost of ``pneumaquad.core.kernel.step_actuators`` per actuator per 1 ms control step.
 
 Measures N = 1, 12 and 1000 externally driven actuators (crr-gamma parameters) with the
 full model (underlapped valve + Stribeck-tanh friction + adiabatic chambers) and, in the
@@ -30,11 +30,11 @@ import numpy as np
 from numba import njit
 
 from _bench import Stats, machine_line, run_child, stats, table, write_json
-from pneumaquad import layout
-from pneumaquad.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.kernel import step_actuators
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.kernel import step_actuators
+from pneumaquad.core.pneumatics import pneumatic_rates, port_flow, valve_connections
 from pneumaquad.params import load_actuator, load_rig
-from pneumaquad.pneumatics import pneumatic_rates, port_flow, valve_connections
 
 TARGET_NS = 1000.0
 TARGET_COUNT = 12
@@ -216,9 +216,9 @@ CHILD = r"""
 import json, sys, time
 t0 = time.perf_counter()
 import numpy as np
-from pneumaquad import layout
-from pneumaquad.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.kernel import step_actuators
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.kernel import step_actuators
 from pneumaquad.params import load_actuator
 t1 = time.perf_counter()
 cfg = json.loads(sys.argv[1])

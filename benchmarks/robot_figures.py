@@ -54,14 +54,14 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from pneumaquad import layout
-from pneumaquad.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.kernel import step_actuators
-from pneumaquad.layout import P_PATM, P_PE, P_PS
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.kernel import step_actuators
+from pneumaquad.core.layout import P_PATM, P_PE, P_PS
+from pneumaquad.io.recording import read_recording
 from pneumaquad.locomotion.stance_control import StanceControlSettings, track_stance_loads
 from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.params import load_actuator, load_robot
-from pneumaquad.recording import read_recording
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.experiment import run_phases
 from pneumaquad.robot.linkage import moment_arm
@@ -169,7 +169,7 @@ def _released(gravity: bool, seal_friction: bool) -> RobotSimulation:
 
 
 def _volumes(sim: RobotSimulation) -> tuple[np.ndarray, np.ndarray]:
-    from pneumaquad.physics.chamber import chamber_volume_cap, chamber_volume_rod
+    from pneumaquad.core.physics.chamber import chamber_volume_cap, chamber_volume_rod
 
     p, x = sim.params, sim.positions
     cap = np.array([chamber_volume_cap(x[i], p[i, layout.P_CAP_AREA], p[i, layout.P_CAP_DEAD])

@@ -21,7 +21,7 @@ stepping loop on the first call), it measures:
   (the thorax rises a few cm over the 5 s), but the constraint rows stay the same (four
   pyramidal foot contacts and 12 tendon friction rows);
 * a **breakdown** per control step, each part timed alone in its own loop on the same
-  12 rows: the pneumatic kernel (``pneumaquad.kernel.step_actuators`` from a compiled
+  12 rows: the pneumatic kernel (``pneumaquad.core.kernel.step_actuators`` from a compiled
   loop), the whole control step without MuJoCo (``robot_control_step``: linkage, PID,
   kernel, forces and friction written back) and hence the controller and coupling glue
   (control step - kernel), 12 ``pid_update`` calls alone, and the recording (one row
@@ -46,8 +46,8 @@ import numpy as np
 from numba import njit
 
 from _bench import Stats, machine_line, stats, table, write_json
-from pneumaquad.control.pid import pid_update
-from pneumaquad.kernel import step_actuators
+from pneumaquad.core.control.pid import pid_update
+from pneumaquad.core.kernel import step_actuators
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.coupling import robot_control_step

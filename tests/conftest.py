@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumaquad import layout
-from pneumaquad.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
 from pneumaquad.params import load_actuator, load_rig
 from pneumaquad.params.schema import ActuatorParameters, RigSetup
 from pneumaquad.rig.simulate import RigResult, simulate_rig
@@ -88,7 +88,7 @@ def _cylinder(obj):
 
 
 class Actuators:
-    """N externally driven actuators for :func:`pneumaquad.kernel.step_actuators`."""
+    """N externally driven actuators for :func:`pneumaquad.core.kernel.step_actuators`."""
 
     def __init__(self, actuators, positions, cap_pressures, rod_pressures):
         self.params = np.vstack([pack_parameters(a) for a in actuators])
@@ -117,7 +117,7 @@ def gamma() -> ActuatorParameters:
 
 
 #: The command line, started the way the console script does.
-CLI = [sys.executable, "-c", "from pneumaquad.cli import main; main()"]
+CLI = [sys.executable, "-c", "from pneumaquad.cli.main import main; main()"]
 
 
 def interrupt_when_recording(

@@ -9,10 +9,10 @@ import pytest
 from scipy.io import savemat
 
 from conftest import CLI, interrupt_when_recording
+from pneumaquad.io.recording import read_recording
 from pneumaquad.params import load_rig
-from pneumaquad.recording import read_recording
+from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals
-from pneumaquad.rig.experiment import run_rig_experiment
 
 
 def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
@@ -254,7 +254,7 @@ def test_rig_options_are_checked_before_anything_runs(tmp_path: Path, args, frag
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     from typer.testing import CliRunner
 
-    from pneumaquad.cli import app
+    from pneumaquad.cli.main import app
     from pneumaquad.params import ParameterError
 
     monkeypatch.chdir(tmp_path)
@@ -283,7 +283,7 @@ def test_numeric_options_are_finite_and_bounded(tmp_path: Path, args, fragment: 
                                                 monkeypatch: pytest.MonkeyPatch) -> None:
     from typer.testing import CliRunner
 
-    from pneumaquad.cli import app
+    from pneumaquad.cli.main import app
 
     monkeypatch.chdir(tmp_path)
     result = CliRunner().invoke(app, list(args))

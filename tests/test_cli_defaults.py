@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import inspect
 
-from pneumaquad.cli_robot import robot_walk
+from pneumaquad.cli.robot import robot_walk
 from pneumaquad.locomotion.stance_control import StanceControlSettings
 from pneumaquad.locomotion.walking import WalkSettings
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from conftest import Actuators, actuator_setup
-from pneumaquad import layout
-from pneumaquad.kernel import step_actuators
-from pneumaquad.physics.friction import FRICTION_STRIBECK_TANH, friction_force
+from pneumaquad.core import layout
+from pneumaquad.core.kernel import step_actuators
+from pneumaquad.core.physics.friction import FRICTION_STRIBECK_TANH, friction_force
 
 # A mix that exercises every branch the kernel has: both valve models, both flow forms,
 # every friction and thermodynamics model, a spool lag.

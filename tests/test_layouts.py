@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pneumaquad import layout
-from pneumaquad.actuator import supply_state
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import supply_state
 from pneumaquad.params import load_rig, load_robot
 from pneumaquad.rig.model import pack_rig_parameters, rig_initial_state
 from pneumaquad.rig.simulate import (

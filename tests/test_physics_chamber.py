@@ -12,16 +12,16 @@ import numpy as np
 import pytest
 
 from conftest import CP_AIR, K_AIR, R_AIR, TS, Actuators, cap_volume, rig_setup, rod_volume, run_rig
-from pneumaquad import layout
-from pneumaquad.kernel import step_actuators
-from pneumaquad.physics.chamber import (
+from pneumaquad.core import layout
+from pneumaquad.core.kernel import step_actuators
+from pneumaquad.core.physics.chamber import (
     THERMO_ADIABATIC,
     chamber_pressure_rate,
     chamber_temperature,
     chamber_volume_cap,
     chamber_volume_rod,
 )
-from pneumaquad.physics.orifice import orifice_coefficients
+from pneumaquad.core.physics.orifice import orifice_coefficients
 
 _, C2 = orifice_coefficients(K_AIR, R_AIR)
 SIMPLE = 'valve.model="simple"'

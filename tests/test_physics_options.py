@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from conftest import R_AIR, actuator_setup
-from pneumaquad import layout
-from pneumaquad.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.kernel import step_actuators
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.kernel import step_actuators
 
 DT = 1e-3
 
@@ -103,10 +103,10 @@ def test_valve_parts_switch_separately() -> None:
     """Thesis Table 3's ablations: ``area_curve="linear"`` gives the simple valve's slot area
     with the tanh input pressures kept; ``input_pressure="switched"`` gives plain
     supply/exhaust with the polynomial areas kept."""
-    from pneumaquad.actuator import pack_parameters
+    from pneumaquad.core.actuator import pack_parameters
+    from pneumaquad.core.physics.valve import input_pressure, simple_valve_area
+    from pneumaquad.core.pneumatics import valve_connections
     from pneumaquad.params import load_actuator
-    from pneumaquad.physics.valve import input_pressure, simple_valve_area
-    from pneumaquad.pneumatics import valve_connections
 
     base = load_actuator("thesis-rig")
     linear = load_actuator("thesis-rig", ['valve.area_curve="linear"'])

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import K_AIR, R_AIR
-from pneumaquad.physics.orifice import (
+from pneumaquad.core.physics.orifice import (
     ISO_REFERENCE_DENSITY,
     ISO_REFERENCE_TEMPERATURE,
     area_to_sonic_conductance,

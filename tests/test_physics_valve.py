@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 
 from conftest import PSI, actuator_setup
-from pneumaquad import layout
-from pneumaquad.actuator import pack_parameters
-from pneumaquad.physics.valve import (
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import pack_parameters
+from pneumaquad.core.physics.valve import (
     centered_voltage,
     input_pressure,
     polynomial_area,
     simple_valve_area,
 )
-from pneumaquad.pneumatics import valve_connections
+from pneumaquad.core.pneumatics import valve_connections
 
 # App. B.1.1 l.24-27, 78-79
 PS = (50.3 + 14.7) * PSI

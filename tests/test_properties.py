@@ -16,8 +16,8 @@ from conftest import (
     rod_volume,
     run_rig,
 )
-from pneumaquad import layout
-from pneumaquad.kernel import step_actuators
+from pneumaquad.core import layout
+from pneumaquad.core.kernel import step_actuators
 
 FRICTION = ["stribeck_tanh", "viscous", "coulomb", "coulomb_viscous", "lugre"]
 ORIENTATION = ["vertical_down", "vertical_up", "horizontal"]

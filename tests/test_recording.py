@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumaquad import plotting
-from pneumaquad.recording import (
+from pneumaquad.io.recording import (
     RunRecorder,
     create_run_folder,
     read_recording,
     write_summary,
 )
+from pneumaquad.reporting import plotting
 
 COLUMNS = ["time [s]", "position [m]", "cap pressure [Pa]"]
 

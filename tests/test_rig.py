@@ -21,13 +21,13 @@ from conftest import (
     rod_volume,
     run_rig,
 )
-from pneumaquad.control.pid import (
+from pneumaquad.core.control.pid import (
     new_pid_state,
     pid_gains,
     pid_update,
 )
+from pneumaquad.core.physics.valve import input_pressure
 from pneumaquad.params import ParameterError
-from pneumaquad.physics.valve import input_pressure
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import simulate_rig
 

@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pneumaquad.io.recording import read_recording
 from pneumaquad.params import load_rig
-from pneumaquad.recording import read_recording
+from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals
-from pneumaquad.rig.experiment import run_rig_experiment
 from pneumaquad.rig.simulate import RIG_COLUMNS, RigDivergedError, first_non_finite, simulate_rig
 
 

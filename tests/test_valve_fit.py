@@ -7,7 +7,7 @@ from decimal import Decimal
 import numpy as np
 import pytest
 
-from pneumaquad import valve_fit as vf
+from pneumaquad.core import valve_fit as vf
 
 # App. B.1.2 Port_2 l.44 (x > 0) and l.48 (x <= 0), "reg. polyfit", as printed.
 PORT2_POSITIVE_PRINTED = ["1.32e-8", "-1.302e-7", "3.608e-7", "-4.33e-8", "1.42e-8"]
@@ -125,7 +125,7 @@ def test_fit_input_pressure_curve_recovers_cutoffs(high: float, low: float) -> N
 
 
 def test_array_input_pressure_is_the_compiled_one() -> None:
-    from pneumaquad.physics.valve import input_pressure
+    from pneumaquad.core.physics.valve import input_pressure
 
     u = np.linspace(-3, 3, 61)
     expected = [input_pressure(x, PS, PE, 1.25, -0.75) for x in u]

@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
+from pneumaquad.core.physics.friction import stribeck_tanh_force
+from pneumaquad.core.valve_fit import evaluate_equivalent_area
 from pneumaquad.params import load_rig
-from pneumaquad.physics.friction import stribeck_tanh_force
-from pneumaquad.valve_fit import evaluate_equivalent_area
 
 STEP = re.compile(r"^# fit 'equivalent area at ([-+0-9.]+) V'")
 AREA = re.compile(r"^#   port([12])_area \[m\^2\] = ([-+0-9.e]+)")

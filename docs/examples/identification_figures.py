@@ -33,12 +33,12 @@ import itertools
 
 import numpy as np
 
+from pneumaquad.core.valve_fit import evaluate_equivalent_area
 from pneumaquad.identification import equivalent_area_for_step, input_pressure_curves
 from pneumaquad.identification.input_pressure import steady_state_points
 from pneumaquad.params import load_rig
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import simulate_rig
-from pneumaquad.valve_fit import evaluate_equivalent_area
 
 POSITION_NOISE, PRESSURE_NOISE = 10e-6, 500.0  # [m], [Pa], one standard deviation
 AREA_FACTORS = {1: 0.75, 2: 1.3}

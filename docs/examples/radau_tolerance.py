@@ -3,7 +3,7 @@
 thesis-rig, Radau, open-loop step to 6 V after 1 s at the opposite saturation, 3 s in all
 (the piston reaches the extended end stop at about 1.8 s and rests there), once with the
 shipped absolute tolerances (1e-6 of each state's typical size) and once with 1e-8.
-Counts every evaluation of ``pneumaquad.kernel.rig_rates`` (the solver's and those of the
+Counts every evaluation of ``pneumaquad.core.kernel.rig_rates`` (the solver's and those of the
 forward-difference Jacobian) per 1 ms control interval, and prints the mean per 100 ms.
 The 1e-8 run takes a few minutes.
 

@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 
 pytest.importorskip("viser")
 
-from pneumaquad.console.cli import console_command
+from pneumaquad.cli.console import console_command
 
 
 def test_console_command_serves_on_loopback_and_stops() -> None:

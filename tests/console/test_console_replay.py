@@ -14,13 +14,13 @@ from typer.testing import CliRunner
 
 pytest.importorskip("viser")
 
+from pneumaquad.cli.console import console_command
 from pneumaquad.console.app import ConsoleApp
-from pneumaquad.console.cli import console_command
 from pneumaquad.console.replay import ReplayRun, Stability
 from pneumaquad.console.scene import StabilityOverlay
 from pneumaquad.gait.stability import stability_margin, support_polygon
+from pneumaquad.io.recording import read_recording
 from pneumaquad.params import load_robot
-from pneumaquad.recording import read_recording
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.experiment import run_phases
 from pneumaquad.robot.scenarios import stand_up_phases

@@ -17,8 +17,8 @@ from typer.testing import CliRunner
 
 pytest.importorskip("viser")
 
+from pneumaquad.cli.console import console_command
 from pneumaquad.console.app import ConsoleApp
-from pneumaquad.console.cli import console_command
 from pneumaquad.console.devices import (
     BUTTON_ENGAGE,
     DeviceServer,

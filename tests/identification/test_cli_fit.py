@@ -10,7 +10,7 @@ import pyarrow.parquet as pq
 import pytest
 from typer.testing import CliRunner
 
-from pneumaquad.cli_fit import fit_app
+from pneumaquad.cli.fit import fit_app
 from pneumaquad.params import load_rig
 
 from .conftest import (

@@ -1,7 +1,7 @@
 """The README's `pneumaquad fit` example, run as printed on generated lab data.
 
 The README points the example at the demo's stand-in lab data (runs/demo/lab-data, written
-by `pneumaquad.demo_reports.write_identification_lab_data`). Here the same writer makes a
+by `pneumaquad.demo.reports.write_identification_lab_data`). Here the same writer makes a
 smaller set in a temporary folder, each README line is split like a shell would split it,
 the demo paths are pointed at that folder, and the commands run through typer's CliRunner.
 """
@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from pneumaquad.cli import app
-from pneumaquad.demo_reports import write_identification_lab_data
+from pneumaquad.cli.main import app
+from pneumaquad.core.valve_fit import evaluate_equivalent_area
+from pneumaquad.demo.reports import write_identification_lab_data
 from pneumaquad.params import load_rig
-from pneumaquad.valve_fit import evaluate_equivalent_area
 
 README = Path(__file__).resolve().parents[2] / "README.md"
 DEMO_LAB_DATA = "runs/demo/lab-data"

@@ -9,9 +9,9 @@ import pytest
 from typer.testing import CliRunner
 
 from conftest import CLI
-from pneumaquad.cli import app
+from pneumaquad.cli.main import app
+from pneumaquad.io.recording import read_recording
 from pneumaquad.params import ParameterError, load_rig
-from pneumaquad.recording import read_recording
 
 #: The README's sweep: centered -1.25 ... +0.75 V, at least two points in each port's
 #: transition (eq 4.2.7-4.2.11 with thesis-rig's cutoffs).

@@ -10,6 +10,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pneumaquad.core.valve_fit import (
+    PORT2_DISCHARGE_COEFFICIENTS,
+    THESIS_VOLTAGES,
+    equivalent_areas,
+    evaluate_equivalent_area,
+    input_pressure,
+    thesis_port_polynomials,
+)
 from pneumaquad.identification import (
     IdentificationError,
     area_polynomial_updates,
@@ -27,14 +35,6 @@ from pneumaquad.identification.equivalent_area import (
 from pneumaquad.identification.preprocess import REQUIRED_COLUMNS
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import simulate_rig
-from pneumaquad.valve_fit import (
-    PORT2_DISCHARGE_COEFFICIENTS,
-    THESIS_VOLTAGES,
-    equivalent_areas,
-    evaluate_equivalent_area,
-    input_pressure,
-    thesis_port_polynomials,
-)
 
 from .conftest import (
     POSITION_NOISE,

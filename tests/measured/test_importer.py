@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-from pneumaquad.measured import (
+from pneumaquad.io.measured import (
     MeasuredDataError,
     list_source_columns,
     load_mapping,

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from typer.testing import CliRunner
 
-from pneumaquad.cli_serve import serve_app
+from pneumaquad.cli.serve import serve_app
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.server import DynamicsServer
 from pneumaquad.params import load_robot

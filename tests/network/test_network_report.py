@@ -57,8 +57,8 @@ def test_ctrl_c_stops_the_dynamics_server_with_its_files(tmp_path: Path) -> None
     import json
     import socket
 
+    from pneumaquad.io.recording import read_recording
     from pneumaquad.network.protocol import MessageType, encode_command
-    from pneumaquad.recording import read_recording
 
     out = tmp_path / "served"
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:

@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pneumaquad.io.recording import read_recording
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.thesis_server import ThesisServer
 from pneumaquad.params import load_robot
-from pneumaquad.recording import read_recording
 from pneumaquad.robot.builder import build_robot
 
 LAYOUT = struct.Struct("<21d")  # L11..L13 R11..R13 L21..L23 R21..R23 ori11..ori33

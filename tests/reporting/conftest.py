@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumaquad.demo_reports import write_lab_style_csv
+from pneumaquad.demo.reports import write_lab_style_csv
 from pneumaquad.params import load_rig, load_robot
+from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals
-from pneumaquad.rig.experiment import run_rig_experiment
 
 INCH = 0.0254
 PSI = 6894.757293168361
@@ -34,9 +34,9 @@ def rig_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(scope="session")
 def robot_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Front-right gamma following the fast sine for 0.5 s after a 0.2 s settle."""
+    from pneumaquad.reporting.robot_plots import plot_joints
     from pneumaquad.robot.builder import build_robot
     from pneumaquad.robot.experiment import run_phases
-    from pneumaquad.robot.plots import plot_joints
     from pneumaquad.robot.scenarios import leg_validation_phases
     from pneumaquad.robot.simulation import RobotSimulation
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from pneumaquad.cli import app
-from pneumaquad.recording import read_recording
+from pneumaquad.cli.main import app
+from pneumaquad.io.recording import read_recording
 
 from .conftest import write_measured_csv
 

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumaquad.measured import load_mapping, read_measured
-from pneumaquad.recording import read_recording
+from pneumaquad.io.measured import load_mapping, read_measured
+from pneumaquad.io.recording import read_recording
 from pneumaquad.reporting import build_run_report, compare_with_measured
 from pneumaquad.reporting.run_folder import ReportError
 

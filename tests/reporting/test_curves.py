@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from pneumaquad.actuator import chamber_ports
+from pneumaquad.core.actuator import chamber_ports
 from pneumaquad.params import load_actuator, load_rig
 from pneumaquad.reporting.curves import (
     area_curves,

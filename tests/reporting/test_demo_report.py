@@ -9,7 +9,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from pneumaquad.demo import DemoReport
+from pneumaquad.demo.run import DemoReport
 
 
 def test_demo_report_sections_escape_and_embed(tmp_path: Path) -> None:

@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from pneumaquad.layout import (
+from pneumaquad.core.layout import (
     P_CAP_AREA,
     P_CAP_DEAD,
     P_CP,
@@ -36,8 +36,8 @@ from pneumaquad.layout import (
     S_POSITION,
     S_ROD_PRESSURE,
 )
+from pneumaquad.core.physics.chamber import chamber_volume_cap, chamber_volume_rod
 from pneumaquad.params import load_robot
-from pneumaquad.physics.chamber import chamber_volume_cap, chamber_volume_rod
 from pneumaquad.robot.builder import RobotModel, build_robot
 from pneumaquad.robot.coupling import piston_from_angle
 from pneumaquad.robot.feedback import tibia_body_legs

@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pytest
 
-from pneumaquad.layout import P_PATM, P_PE, P_PS
+from pneumaquad.core.layout import P_PATM, P_PE, P_PS
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.linkage import moment_arm

@@ -12,9 +12,9 @@ import pytest
 from typer.testing import CliRunner
 
 from conftest import CLI, interrupt_when_recording
-from pneumaquad.cli import app
+from pneumaquad.cli.main import app
+from pneumaquad.io.recording import read_recording
 from pneumaquad.params import load_robot
-from pneumaquad.recording import read_recording
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.experiment import run_phases
 from pneumaquad.robot.scenarios import (

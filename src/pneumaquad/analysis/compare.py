@@ -2,7 +2,7 @@
 
 Both recordings are dicts of numpy arrays keyed ``"quantity [unit]"`` in SI units, as
 written by the rig simulator (`pneumaquad.rig.simulate.RIG_COLUMNS`) and returned by
-`pneumaquad.measured.read_measured`. The figures follow the thesis' validation in
+`pneumaquad.io.measured.read_measured`. The figures follow the thesis' validation in
 section 4.3: RMSE over the whole run, also relative to a range (transcript lines
 824-826), the lag between signals (line 818), and the time constants of first-order
 fits to step responses, eq (4.3.1) (lines 812-814).

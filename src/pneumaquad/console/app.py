@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import viser
 
-from pneumaquad.layout import P_PATM, P_PS
+from pneumaquad.core.layout import P_PATM, P_PS
 from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot

@@ -2,7 +2,7 @@
 
 A run folder (``pneumaquad robot stand/walk ... -o FOLDER``) holds ``model.xml`` (the
 compiled MJCF), ``trajectory.npz`` (``time`` (T,), ``qpos`` (T, nq) at the recording rate)
-and ``recording.parquet`` (:func:`pneumaquad.recording.read_recording`).
+and ``recording.parquet`` (:func:`pneumaquad.io.recording.read_recording`).
 :class:`ReplayRun` loads it; :meth:`ReplayRun.show` puts the nearest trajectory sample
 into its own :class:`mujoco.MjData` (``mj_forward``) for the scene, and
 :meth:`ReplayRun.row_at` finds the recording row nearest in time for the readouts.
@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 
 from pneumaquad.gait.stability import STANCE_FORCE, loaded_support
-from pneumaquad.recording import read_recording
+from pneumaquad.io.recording import read_recording
 from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["CONTACT_FORCE", "ReplayError", "ReplayRun", "Stability", "static_stability"]

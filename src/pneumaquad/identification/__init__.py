@@ -4,7 +4,7 @@ Friction from open-loop steps (stiction peaks, Coulomb-viscous and Stribeck-tanh
 the underlapped valve's input-pressure curves from fixed-piston tests, equivalent orifice
 areas fitted around the rig simulator and their polynomials, and parameter files written
 from the results. Pure functions over recordings (dicts of SI arrays keyed
-``"quantity [unit]"``, simulated or from `pneumaquad.measured`).
+``"quantity [unit]"``, simulated or from `pneumaquad.io.measured`).
 """
 
 from .friction import (

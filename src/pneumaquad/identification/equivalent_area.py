@@ -26,17 +26,17 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from pneumaquad import layout
-from pneumaquad.actuator import supply_state
 from pneumaquad.analysis import find_steps
 from pneumaquad.analysis.filters import sample_rate_of
-from pneumaquad.control.pid import new_pid_state
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import supply_state
+from pneumaquad.core.control.pid import new_pid_state
+from pneumaquad.core.physics.chamber import chamber_volume_cap, chamber_volume_rod
+from pneumaquad.core.physics.valve import centered_voltage
+from pneumaquad.core.valve_fit import evaluate_equivalent_area
 from pneumaquad.params.schema import RigSetup
-from pneumaquad.physics.chamber import chamber_volume_cap, chamber_volume_rod
-from pneumaquad.physics.valve import centered_voltage
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk
-from pneumaquad.valve_fit import evaluate_equivalent_area
 
 from .preprocess import REQUIRED_COLUMNS, IdentificationError, select_step
 from .report import FitResult, covariance_from_jacobian, r_squared

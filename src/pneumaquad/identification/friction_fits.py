@@ -3,7 +3,7 @@
 The Coulomb-viscous law (eq 4.2.4, sliding branch) is linear in its parameters and is
 solved directly; the Stribeck-tanh law (eq 4.2.6) is fitted with bounded
 `scipy.optimize.least_squares` using the library's own force law
-(`pneumaquad.physics.friction.stribeck_tanh_force`). Both report standard errors from the
+(`pneumaquad.core.physics.friction.stribeck_tanh_force`). Both report standard errors from the
 Jacobian, R² and the residual RMS in a `FitResult`.
 """
 
@@ -16,8 +16,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import least_squares
 
-from pneumaquad.jit import compiled
-from pneumaquad.physics.friction import stribeck_tanh_force
+from pneumaquad.core.jit import compiled
+from pneumaquad.core.physics.friction import stribeck_tanh_force
 
 from .preprocess import IdentificationError
 from .report import FitResult, covariance_from_jacobian, r_squared
@@ -101,7 +101,7 @@ def _stribeck_tanh_array(velocity, fs, fc, cv, vs, exponent, ktanh):
 
 
 def stribeck_tanh_curve(velocity: ArrayLike, parameters: Mapping[str, float]) -> np.ndarray:
-    """Stribeck-tanh friction (eq 4.2.6, `pneumaquad.physics.friction`) at many velocities.
+    """Stribeck-tanh friction (eq 4.2.6, `pneumaquad.core.physics.friction`) at many velocities.
 
     Parameters
     ----------

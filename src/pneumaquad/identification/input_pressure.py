@@ -3,7 +3,7 @@
 With the piston held (the rig's spacer), each chamber settles at the input pressure its
 valve port presents, so the settled pressures against the centered voltage trace the
 tanh curves of eq 4.2.7-4.2.11 (Fig. 23). The library's model
-(`pneumaquad.physics.valve.input_pressure`, array form `pneumaquad.valve_fit`) holds
+(`pneumaquad.core.physics.valve.input_pressure`, array form `pneumaquad.core.valve_fit`) holds
 supply and exhaust pressure and has two shape parameters per port: the high and low
 pressure cutoffs C_HP and C_LP.
 """
@@ -20,8 +20,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import least_squares
 
+from pneumaquad.core.valve_fit import input_pressure
 from pneumaquad.params.schema import RigSetup
-from pneumaquad.valve_fit import input_pressure
 
 from .preprocess import IdentificationError
 from .report import FitResult, covariance_from_jacobian, r_squared

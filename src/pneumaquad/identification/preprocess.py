@@ -1,7 +1,7 @@
 """Shared signal preparation for parameter identification from rig recordings.
 
-A recording (simulated, `pneumaquad.recording.read_recording`, or measured,
-`pneumaquad.measured.read_measured`) is turned into filtered position, velocity,
+A recording (simulated, `pneumaquad.io.recording.read_recording`, or measured,
+`pneumaquad.io.measured.read_measured`) is turned into filtered position, velocity,
 acceleration and pressures, and into the forces of the piston force balance, eq 4.1.11:
 
     m·a = F_pneumatic + F_gravity - F_friction (+ F_end_stop at the stops),
@@ -21,8 +21,8 @@ import numpy as np
 
 from pneumaquad.analysis import find_steps, lowpass_filter, velocity_from_position
 from pneumaquad.analysis.segmentation import StepSegment
+from pneumaquad.core.physics.force import gravity_force, piston_force
 from pneumaquad.params.schema import RigSetup
-from pneumaquad.physics.force import gravity_force, piston_force
 
 __all__ = [
     "REQUIRED_COLUMNS",
@@ -110,7 +110,7 @@ class PreparedSignals:
         """Friction from the force balance away from the stops, F_pn + F_g - m·a [N].
 
         Positive values oppose positive velocity (the sign convention of
-        `pneumaquad.physics.friction`). Wrong while a stop pushes on the piston.
+        `pneumaquad.core.physics.friction`). Wrong while a stop pushes on the piston.
         """
         return self.pneumatic_force + self.gravity_force - self.moving_mass * self.acceleration
 

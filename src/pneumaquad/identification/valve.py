@@ -5,13 +5,13 @@ Three steps, as in the thesis:
 1. Input-pressure curves from fixed-piston (spacer) tests: with the piston held, each
    chamber settles at its port's input pressure, so the steady-state pressures against
    the centered voltage give the tanh curves of eq 4.2.7-4.2.11. The library model
-   (`pneumaquad.physics.valve.input_pressure`) has supply and exhaust pressure fixed and
+   (`pneumaquad.core.physics.valve.input_pressure`) has supply and exhaust pressure fixed and
    two shape parameters per port: the high and low pressure cutoffs C_HP, C_LP.
 2. Equivalent orifice areas: for each open-loop step at a voltage u the thesis hand-tuned
    a discharge coefficient until simulated pressures and position matched. Here the areas
    at u are fitted by bounded least squares around the rig simulator.
 3. Fourth-order polynomials through the areas, one per port and side of the offset
-   (`pneumaquad.valve_fit`, App. B.2).
+   (`pneumaquad.core.valve_fit`, App. B.2).
 
 Voltages called *centered* are measured from the valve offset, after saturation. Steps 1
 and 2 live in `pneumaquad.identification.input_pressure` and
@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pneumaquad.valve_fit import evaluate_equivalent_area, fit_equivalent_area_polynomials
+from pneumaquad.core.valve_fit import evaluate_equivalent_area, fit_equivalent_area_polynomials
 
 from .equivalent_area import (
     AREA_MODES,
@@ -90,7 +90,7 @@ def fit_area_polynomials(
 ) -> dict[int, AreaPolynomials]:
     """Fourth-order polynomials per port and side of the offset (thesis 4.2.3.1, App. B.2).
 
-    Uses `pneumaquad.valve_fit.fit_equivalent_area_polynomials`: ordinary least squares
+    Uses `pneumaquad.core.valve_fit.fit_equivalent_area_polynomials`: ordinary least squares
     per side, the point at 0 V (if any) in both.
 
     Parameters

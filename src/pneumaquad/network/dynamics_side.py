@@ -37,7 +37,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from pneumaquad.layout import (
+from pneumaquad.core.layout import (
     P_CAP_AREA,
     P_PATM,
     P_PE,

@@ -1,7 +1,7 @@
 """Run-folder output of a networked peer: robot recording, packet log, timing figures.
 
 :class:`NetworkRecording` buffers recording rows and hands them to a
-:class:`~pneumaquad.recording.RunRecorder` in blocks (``recording.csv`` stays readable
+:class:`~pneumaquad.io.recording.RunRecorder` in blocks (``recording.csv`` stays readable
 while the run goes on; ``recording.parquet`` on close). :func:`write_network_files`
 writes ``packets.parquet``, ``timing.json`` (:func:`~pneumaquad.network.timing.timing_summary`
 plus the caller's figures), ``rtt.png`` and ``timeline.png``.
@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from pneumaquad.io.recording import RunRecorder, jsonable
 from pneumaquad.network.packet_log import PacketLog
 from pneumaquad.network.timing import timing_summary
-from pneumaquad.recording import RunRecorder, jsonable
 
 __all__ = ["NetworkRecording", "write_network_files", "write_run_description"]
 
@@ -99,8 +99,8 @@ def write_network_files(folder: Path, log: PacketLog, control_step: float,
 def write_run_description(folder: Path, robot: Any, summary: Mapping[str, Any]) -> None:
     """Write ``parameters.toml``, ``model.xml`` and ``summary.json`` of a networked run, so
     that ``pneumaquad report`` and ``pneumaquad video`` read it like any robot run."""
+    from pneumaquad.io.recording import write_summary
     from pneumaquad.params import resolved_parameters_toml
-    from pneumaquad.recording import write_summary
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)

@@ -61,7 +61,7 @@ _CATCH_UP_PERIODS = 10  # a realtime loop further behind than this restarts its 
 
 
 class StopFlag(Protocol):
-    """Anything with a boolean ``requested`` (e.g. :class:`pneumaquad.interruption.StopRequest`)."""
+    """Anything with a boolean ``requested`` (e.g. ``pneumaquad.io.interruption.StopRequest``)."""
 
     requested: bool
 

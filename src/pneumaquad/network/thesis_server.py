@@ -27,12 +27,12 @@ from typing import Any
 
 import numpy as np
 
+from pneumaquad.io.recording import jsonable
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.endpoint import DEFAULT_HOST, Address
 from pneumaquad.network.run_output import NetworkRecording, write_run_description
 from pneumaquad.network.thesis import THESIS_SIZE, decode_thesis_command, encode_thesis_state
 from pneumaquad.network.wire import ProtocolError
-from pneumaquad.recording import jsonable
 from pneumaquad.robot.errors import SimulationDivergedError
 
 __all__ = ["ThesisServer"]

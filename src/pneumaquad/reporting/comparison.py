@@ -20,8 +20,14 @@ from pneumaquad.analysis.compare import (
     compare_recordings,
 )
 from pneumaquad.analysis.segmentation import find_steps, metrics_per_step
-from pneumaquad.conversions import METRE_PER_INCH, PASCAL_PER_PSI
-from pneumaquad.plotting import DPI, metres_to_inches, pascals_to_psi, plot_comparison, plt
+from pneumaquad.params.conversions import METRE_PER_INCH, PASCAL_PER_PSI
+from pneumaquad.reporting.plotting import (
+    DPI,
+    metres_to_inches,
+    pascals_to_psi,
+    plot_comparison,
+    plt,
+)
 
 from .run_folder import ReportError
 

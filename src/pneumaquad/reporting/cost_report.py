@@ -8,7 +8,7 @@ import math
 from dataclasses import asdict
 from pathlib import Path
 
-from pneumaquad.plotting import DPI, plt
+from pneumaquad.reporting.plotting import DPI, plt
 
 from .cost_table import CostTable
 from .html import HtmlPage, format_value

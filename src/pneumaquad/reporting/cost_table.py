@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from pneumaquad.actuator import supply_state
-from pneumaquad.control.pid import new_pid_state
-from pneumaquad.conversions import METRE_PER_INCH
+from pneumaquad.core.actuator import supply_state
+from pneumaquad.core.control.pid import new_pid_state
 from pneumaquad.params import RigSetup, load_rig
+from pneumaquad.params.conversions import METRE_PER_INCH
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 from pneumaquad.rig.signals import sine
 from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from pneumaquad.conversions import NEWTON_PER_LBF
 from pneumaquad.params import ActuatorParameters
-from pneumaquad.plotting import DPI, METRE_PER_INCH, PASCAL_PER_PSI, plt
+from pneumaquad.params.conversions import NEWTON_PER_LBF
+from pneumaquad.reporting.plotting import DPI, METRE_PER_INCH, PASCAL_PER_PSI, plt
 
 from .curves import (
     area_curves,

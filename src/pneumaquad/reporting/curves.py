@@ -19,10 +19,10 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-from pneumaquad.actuator import FRICTION_CODES, chamber_ports
+from pneumaquad.core.actuator import FRICTION_CODES, chamber_ports
+from pneumaquad.core.physics.friction import FRICTION_LUGRE, friction_force, stribeck_curve
+from pneumaquad.core.valve_fit import evaluate_equivalent_area, input_pressure
 from pneumaquad.params import ActuatorParameters, FrictionParameters, ValveParameters
-from pneumaquad.physics.friction import FRICTION_LUGRE, friction_force, stribeck_curve
-from pneumaquad.valve_fit import evaluate_equivalent_area, input_pressure
 
 __all__ = [
     "AreaCurve",
@@ -98,7 +98,7 @@ class PressureCurve:
 def friction_curve(friction: FrictionParameters, velocity: ArrayLike) -> np.ndarray:
     """Friction force of the configured model at each velocity (positive opposes +v).
 
-    Uses the kernel's own :func:`pneumaquad.physics.friction.friction_force`. LuGre is
+    Uses the kernel's own :func:`pneumaquad.core.physics.friction.friction_force`. LuGre is
     evaluated at its steady state, bristle deflection z = g(v)·sign(v)/σ0, where it equals
     g(v)·sign(v) + Cv·v.
 

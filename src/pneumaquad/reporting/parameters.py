@@ -11,7 +11,6 @@ import math
 from pathlib import Path
 from typing import Any
 
-from pneumaquad.conversions import METRE_PER_INCH, NEWTON_PER_LBF, PASCAL_PER_PSI
 from pneumaquad.params import (
     JOINT_NAMES,
     ActuatorParameters,
@@ -19,6 +18,7 @@ from pneumaquad.params import (
     RigSetup,
     RobotParameters,
 )
+from pneumaquad.params.conversions import METRE_PER_INCH, NEWTON_PER_LBF, PASCAL_PER_PSI
 
 __all__ = [
     "Row",

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pneumaquad.measured import load_mapping, read_measured
+from pneumaquad.io.measured import load_mapping, read_measured
 from pneumaquad.params import RigSetup
 
 from .comparison import compare_with_measured
@@ -50,7 +50,7 @@ def write_run_report(
     folder : Path
         Report folder (created).
     measured : dict of str to numpy.ndarray, optional
-        A measured recording in SI (from :func:`pneumaquad.measured.read_measured`); rig
+        A measured recording in SI (from :func:`pneumaquad.io.measured.read_measured`); rig
         runs only.
     measured_source : str
         Where the measured data came from, for the page.

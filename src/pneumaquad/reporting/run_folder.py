@@ -16,6 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from pneumaquad.io.recording import read_recording
 from pneumaquad.params import (
     JOINT_NAMES,
     ActuatorParameters,
@@ -26,7 +27,6 @@ from pneumaquad.params import (
     load_rig,
     load_robot,
 )
-from pneumaquad.recording import read_recording
 
 __all__ = ["ReportError", "RunFolder", "detect_run_kind", "load_run_folder"]
 

@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from pneumaquad.analysis.compare import comparison_rows, comparison_to_markdown
+from pneumaquad.io.recording import jsonable
 from pneumaquad.params import RigSetup, RobotParameters
-from pneumaquad.plotting import plot_rig_run
-from pneumaquad.recording import jsonable
-from pneumaquad.robot.plots import plot_body, plot_joints
+from pneumaquad.reporting.plotting import plot_rig_run
+from pneumaquad.reporting.robot_plots import plot_body, plot_joints
 
 from .comparison import (
     MeasuredComparison,

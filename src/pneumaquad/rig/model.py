@@ -2,11 +2,11 @@
 
 import numpy as np
 
-from pneumaquad import layout
-from pneumaquad.actuator import initial_state, pack_parameters
-from pneumaquad.control.pid import controller_gains
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import initial_state, pack_parameters
+from pneumaquad.core.control.pid import controller_gains
+from pneumaquad.core.physics.force import gravity_force
 from pneumaquad.params.schema import RigSetup
-from pneumaquad.physics.force import gravity_force
 
 
 def pack_rig_parameters(setup: RigSetup) -> np.ndarray:

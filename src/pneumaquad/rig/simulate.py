@@ -17,17 +17,17 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from pneumaquad import layout
-from pneumaquad.actuator import supply_state
-from pneumaquad.control.pid import new_pid_state, pid_update
-from pneumaquad.interruption import deferred_interrupt
-from pneumaquad.jit import compiled
-from pneumaquad.kernel import rig_rates, step_rigs
+from pneumaquad.core import layout
+from pneumaquad.core.actuator import supply_state
+from pneumaquad.core.control.pid import new_pid_state, pid_update
+from pneumaquad.core.jit import compiled
+from pneumaquad.core.kernel import rig_rates, step_rigs
+from pneumaquad.core.physics.force import end_stop_force
+from pneumaquad.core.physics.friction import FRICTION_LUGRE
+from pneumaquad.core.pneumatics import finish_outputs, friction_of, supply_pressure_now
+from pneumaquad.io.interruption import deferred_interrupt
+from pneumaquad.io.recording import RunRecorder
 from pneumaquad.params.schema import RigSetup
-from pneumaquad.physics.force import end_stop_force
-from pneumaquad.physics.friction import FRICTION_LUGRE
-from pneumaquad.pneumatics import finish_outputs, friction_of, supply_pressure_now
-from pneumaquad.recording import RunRecorder
 from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
 
 #: The rig recording, defined once: (field of a row record, column header) in column
@@ -437,7 +437,7 @@ def simulate_rig_reference(
 
     Each control interval is integrated separately with the command held, from the same
     sampled state as the fixed-step loop, so the two differ only by integration error.
-    The right-hand side is :func:`pneumaquad.kernel.rig_rates`, built from the same
+    The right-hand side is :func:`pneumaquad.core.kernel.rig_rates`, built from the same
     physics functions as the compiled kernels. (The set-valued Coulomb models have no
     ODE form; parameter validation refuses them with an adaptive integrator.)
     """

@@ -6,7 +6,7 @@ between MuJoCo's two step halves (``mj_step1``: kinematics at the present joint 
 
 1. :func:`sample_actuators` reads every piston position and velocity from the present
    tendon lengths and velocities and brings the chambers to the present instant: the
-   pneumatic kernel (:func:`pneumaquad.kernel.step_actuators`) integrates the last
+   pneumatic kernel (:func:`pneumaquad.core.kernel.step_actuators`) integrates the last
    interval along the straight piston path from the previous sample to the present one,
    so the chamber volumes it integrates end exactly at the volumes MuJoCo's motion gives
    (a closed chamber keeps P·V^n). The pneumatic force is that of the present state.
@@ -29,10 +29,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pneumaquad.control.pid import PID_GAINS_DTYPE, pid_update
-from pneumaquad.jit import compiled
-from pneumaquad.kernel import step_actuators
-from pneumaquad.layout import (
+from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update
+from pneumaquad.core.jit import compiled
+from pneumaquad.core.kernel import step_actuators
+from pneumaquad.core.layout import (
     O_PNEUMATIC_FORCE,
     P_OFFSET,
     P_STROKE,
@@ -44,8 +44,8 @@ from pneumaquad.layout import (
     S_ROD_PRESSURE,
     S_VELOCITY,
 )
-from pneumaquad.physics.friction import stribeck_curve
-from pneumaquad.pneumatics import friction_of, friction_slope_of, state_outputs
+from pneumaquad.core.physics.friction import stribeck_curve
+from pneumaquad.core.pneumatics import friction_of, friction_slope_of, state_outputs
 
 #: One cylinder linkage (pneumaquad.robot.linkage, eq 5.2.1-5.2.6).
 LINKAGE_DTYPE = np.dtype([
@@ -105,7 +105,7 @@ class Cylinders(NamedTuple):
 
 
 class ActuatorArrays(NamedTuple):
-    """The pneumatic kernel's packed arrays (pneumaquad.layout)."""
+    """The pneumatic kernel's packed arrays (pneumaquad.core.layout)."""
 
     params: np.ndarray  # (N, N_PARAMETERS)
     state: np.ndarray  # (N, N_STATES)
@@ -116,7 +116,7 @@ class ActuatorArrays(NamedTuple):
 class Controllers(NamedTuple):
     """Per joint: PID gains and memory, settings (JOINT_CONTROL_DTYPE) and references."""
 
-    gains: np.ndarray  # PID_GAINS_DTYPE, pneumaquad.control.pid
+    gains: np.ndarray  # PID_GAINS_DTYPE, pneumaquad.core.control.pid
     gain_scale: np.ndarray  # factor on Kp, Ki, Kd [-]
     settings: np.ndarray  # JOINT_CONTROL_DTYPE
     pid_state: np.ndarray  # PID_STATE_DTYPE

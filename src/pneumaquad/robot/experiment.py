@@ -26,10 +26,10 @@ from typing import Any
 
 import numpy as np
 
-from pneumaquad.interruption import deferred_interrupt
-from pneumaquad.layout import P_R, P_TS
+from pneumaquad.core.layout import P_R, P_TS
+from pneumaquad.io.interruption import deferred_interrupt
+from pneumaquad.io.recording import RunRecorder, write_summary
 from pneumaquad.params import resolved_parameters_toml
-from pneumaquad.recording import RunRecorder, write_summary
 
 from .coupling import MODE_CLOSED_LOOP, MODE_OPEN_LOOP, MODE_UNCOMMANDED
 from .recording import recording_columns, recording_row

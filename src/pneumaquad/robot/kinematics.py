@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from pneumaquad.jit import compiled
+from pneumaquad.core.jit import compiled
 
 JOINT_NAMES = ("alpha", "beta", "gamma")
 _UNIT_TOLERANCE = 1e-9  # allowed | |axis| - 1 |

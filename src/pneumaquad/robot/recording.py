@@ -15,14 +15,14 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from pneumaquad.gait.stability import loaded_support
-from pneumaquad.layout import (
+from pneumaquad.core.layout import (
     O_PNEUMATIC_FORCE,
     P_R,
     S_AIR_CONSUMED,
     S_CAP_PRESSURE,
     S_ROD_PRESSURE,
 )
+from pneumaquad.gait.stability import loaded_support
 from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
 
 from .simulation import RobotSimulation

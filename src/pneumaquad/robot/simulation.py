@@ -19,10 +19,9 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from pneumaquad.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.control.pid import PID_GAINS_DTYPE, controller_gains, new_pid_state
-from pneumaquad.gait.stability import STANCE_FORCE
-from pneumaquad.layout import (
+from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.control.pid import PID_GAINS_DTYPE, controller_gains, new_pid_state
+from pneumaquad.core.layout import (
     N_OUTPUTS,
     N_STATES,
     O_PNEUMATIC_FORCE,
@@ -38,6 +37,7 @@ from pneumaquad.layout import (
     SUPPLY_MODEL,
     SUPPLY_TANK_PRESSURE,
 )
+from pneumaquad.gait.stability import STANCE_FORCE
 from pneumaquad.params import ActuatorParameters
 
 from .builder import RobotModel

@@ -29,7 +29,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-from pneumaquad.jit import compiled
+from pneumaquad.core.jit import compiled
 
 from .coupling import (
     ActuatorArrays,

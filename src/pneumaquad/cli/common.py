@@ -1,0 +1,166 @@
+"""Pieces shared by the command-line modules: console, common options, progress bar.
+
+Sub-command modules (``cli_robot``, ``cli_serve``, ...) import from here, never from
+:mod:`pneumaquad.cli.main`, which registers them; so any of them can be imported first.
+"""
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+from pneumaquad.params import ParameterError, Problem, parse_quantity
+from pneumaquad.params.schema import Bounds
+
+__all__ = [
+    "MAX_CONTROL_STEPS",
+    "MAX_SIMULATED_TIME",
+    "MAX_WALL_TIME",
+    "SIMULATED_DURATION",
+    "WALL_DURATION",
+    "OutputOption",
+    "ParamsOption",
+    "SetOption",
+    "check_step_count",
+    "console",
+    "finish_run",
+    "option_range",
+    "progress_bar",
+    "quantity",
+    "simulated_duration",
+]
+
+#: Longest simulated time of one run [s] (one hour).
+MAX_SIMULATED_TIME = 3600.0
+#: Longest wall-clock time a server or the console may be told to run [s] (one day).
+MAX_WALL_TIME = 86400.0
+#: Most control steps of one run (memory for the recording stays below a few GB).
+MAX_CONTROL_STEPS = 10_000_000
+#: Range of a simulated duration option: (0, 3600 s].
+SIMULATED_DURATION = Bounds(0.0, MAX_SIMULATED_TIME, "s")
+#: Range of a wall-clock duration option: (0, 86400 s].
+WALL_DURATION = Bounds(0.0, MAX_WALL_TIME, "s")
+
+console = Console(stderr=True)
+
+ParamsOption = Annotated[
+    str, typer.Option("--params", "-p", help="Shipped set name or path to a TOML file.")
+]
+SetOption = Annotated[
+    list[str] | None,
+    typer.Option("--set", "-s", help="Override a value: section.key=value (TOML value)."),
+]
+OutputOption = Annotated[
+    Path | None, typer.Option("--output", "-o", help="Run folder (default runs/<kind>-<time>).")
+]
+
+
+@contextmanager
+def progress_bar(label: str) -> Iterator:
+    """A rich progress bar; yields a callback (done, total)."""
+    columns = (
+        TextColumn(label),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=console, transient=True) as progress:
+        task = progress.add_task(label, total=None)
+
+        def update(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
+
+        yield update
+
+
+def quantity(text: str, kind: str, option: str, bounds: Bounds | None = None) -> float:
+    """Parse a command-line quantity such as "0.4 in" to SI.
+
+    Parameters
+    ----------
+    text : str
+        The option's text, a number with a unit.
+    kind : str
+        Kind of quantity (``"time"``, ``"length"``, ...; see ``pneumaquad.params.units``).
+    option : str
+        Option name for the message (``"--duration"``).
+    bounds : Bounds, optional
+        Range the SI value must lie in (it is always finite).
+
+    Returns
+    -------
+    float
+        The SI value.
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, the text and what was expected.
+    """
+    value = parse_quantity(text, kind, option)
+    if bounds is not None and not bounds.contains(value):
+        raise ParameterError([Problem(option, text, f"should be {bounds.expectation}")])
+    return value
+
+
+def simulated_duration(text: str, option: str, control_step: float) -> float:
+    """A simulated duration option [s]: in (0, 3600 s] and at most 10 million control steps.
+
+    Raises
+    ------
+    ParameterError
+        Naming the option, the text and the allowed range.
+    """
+    value = quantity(text, "time", option, SIMULATED_DURATION)
+    check_step_count(value, control_step, option, text)
+    return value
+
+
+def check_step_count(duration: float, control_step: float, option: str, shown: str) -> None:
+    """Refuse a simulated ``duration`` [s] of more than :data:`MAX_CONTROL_STEPS` steps."""
+    steps = duration / control_step
+    if steps > MAX_CONTROL_STEPS:
+        raise ParameterError([Problem(
+            option, shown, f"needs {steps:.3g} control steps of {control_step:g} s; expected "
+            f"at most {MAX_CONTROL_STEPS:,} steps (a shorter run or a longer "
+            "simulation.control_step)")])
+
+
+def option_range(bounds: Bounds) -> Callable[[float | int | None], float | int | None]:
+    """Typer callback for a plain-number option: finite and within ``bounds``.
+
+    The usage error names the option, the value and the range, e.g. ``Invalid value for
+    '--hold': inf should be at least 0 s and at most 3600 s``; it ends with exit status 2
+    before the command runs.
+    """
+
+    def check(value: float | int | None) -> float | int | None:
+        if value is not None and not bounds.contains(float(value)):
+            raise typer.BadParameter(f"{value:g} should be {bounds.expectation}")
+        return value
+
+    return check
+
+
+def finish_run(folder: Path, summary: dict) -> None:
+    """Print where a run went and end with 130 if it was interrupted."""
+    console.print(f"run folder: [bold]{folder}[/bold]")
+    shown = (
+        "simulated time [s]",
+        "wall time [s]",
+        "real-time factor",
+        "rmse [m]",
+        "motion onset delay [s]",
+        "stiction peak force [N]",
+        "air consumed [NL]",
+    )
+    for key in shown:
+        if key in summary:
+            console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
+    if summary.get("interrupted"):
+        console.print("[yellow]interrupted: the recording holds the part that ran[/yellow]")
+        raise typer.Exit(130)

@@ -1,0 +1,106 @@
+"""Command-line interface of the reports: ``pneumaquad report RUN [--measured DATA]`` and
+``pneumaquad report --cost-table``.
+
+A thin layer over :mod:`pneumaquad.reporting`. User errors (missing run folder, malformed
+parameter or measured-data files) print one message and exit with status 2. This module
+imports nothing from :mod:`pneumaquad.cli.main`, so that module can register ``report_command``
+without an import cycle.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from pneumaquad.cli.common import MAX_SIMULATED_TIME, console, option_range, progress_bar
+from pneumaquad.io.measured import MeasuredDataError
+from pneumaquad.params import ParameterError
+from pneumaquad.params.schema import Bounds
+from pneumaquad.reporting.run_folder import ReportError
+
+__all__ = ["REPORT_ERRORS", "report_command"]
+
+#: Exceptions that are the user's input problems: message and exit status 2.
+REPORT_ERRORS = (ReportError, ParameterError, MeasuredDataError)
+
+
+
+def _fail(error: Exception) -> None:
+    console.print("error:", style="bold red", end=" ")
+    console.print(str(error), highlight=False, markup=False, soft_wrap=True)
+    raise typer.Exit(2)
+
+
+def report_command(
+    run: Annotated[
+        Path | None, typer.Argument(help="Run folder of a rig or robot experiment.")
+    ] = None,
+    measured: Annotated[
+        Path | None,
+        typer.Option("--measured", "-m", help="Measured recording (CSV or MAT), rig runs."),
+    ] = None,
+    mapping: Annotated[
+        Path | None,
+        typer.Option("--mapping", help="TOML column mapping of the measured recording."),
+    ] = None,
+    time_offset: Annotated[
+        float,
+        typer.Option("--time-offset", help="Added to the measured time stamps [s], "
+                     "-86400 to 86400.",
+                     callback=option_range(Bounds(-86400.0, 86400.0, "s",
+                                                  lower_inclusive=True))),
+    ] = 0.0,
+    output: Annotated[
+        Path | None,
+        typer.Option("--output", "-o", help="Report folder (default RUN/report, or "
+                     "runs/cost-table with --cost-table)."),
+    ] = None,
+    cost_table: Annotated[
+        bool,
+        typer.Option("--cost-table", help="Instead of a run: time the rig model with "
+                     "components simplified (thesis Table 3) and report that."),
+    ] = False,
+    params: Annotated[
+        str, typer.Option("--params", "-p", help="Rig parameter set for --cost-table.")
+    ] = "thesis-rig",
+    repeats: Annotated[int, typer.Option(
+        help="--cost-table: timed repeats, 2 to 1000.",
+        callback=option_range(Bounds(2, 1000, lower_inclusive=True)))] = 15,
+    duration: Annotated[
+        float, typer.Option(help="--cost-table: simulated time per run [s], 0.1 to 3600.",
+                            callback=option_range(Bounds(0.1, MAX_SIMULATED_TIME, "s",
+                                                         lower_inclusive=True)))
+    ] = 4.0,
+) -> None:
+    """Write report.html (self-contained, figures embedded) and the PNGs of a run folder,
+    optionally compared with a measured recording; or, with --cost-table, the thesis's
+    Table 3 measured on this machine."""
+    if cost_table:
+        _cost_table(output or Path("runs/cost-table"), params, repeats, duration)
+        return
+    if run is None:
+        _fail(ValueError("give a run folder, or --cost-table"))
+    from pneumaquad.reporting.report import build_run_report
+
+    try:
+        with progress_bar("report") as update:
+            path = build_run_report(run, output, measured, mapping, time_offset, update)
+    except REPORT_ERRORS as error:
+        _fail(error)
+    console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)
+
+
+def _cost_table(output: Path, params: str, repeats: int, duration: float) -> None:
+    from pneumaquad.reporting.cost_report import cost_table_markdown, write_cost_table_report
+    from pneumaquad.reporting.cost_table import measure_cost_table
+
+    try:
+        with progress_bar("cost table") as update:
+            table = measure_cost_table(params, duration, repeats, progress=update)
+        path = write_cost_table_report(table, output)
+    except REPORT_ERRORS as error:
+        _fail(error)
+    typer.echo(cost_table_markdown(table))
+    console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)

@@ -1,0 +1,408 @@
+"""Command-line interface of the robot: ``pneumaquad leg ...``, ``robot ...``, ``video``.
+
+Every experiment writes a run folder (see :mod:`pneumaquad.robot.experiment`), prints
+its key figures, and optionally renders a video offscreen.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from pneumaquad.cli.common import (
+    MAX_SIMULATED_TIME,
+    OutputOption,
+    SetOption,
+    console,
+    finish_run,
+    option_range,
+    progress_bar,
+)
+from pneumaquad.params import JOINT_NAMES, load_robot
+from pneumaquad.params.schema import Bounds
+
+leg_app = typer.Typer(
+    help="The front-right leg on a fixed thorax (thesis 5.5.2 validation set-up).",
+    no_args_is_help=True,
+)
+robot_app = typer.Typer(help="The whole quadruped on its 12 pneumatic joints.",
+                        no_args_is_help=True)
+
+RobotParamsOption = Annotated[
+    str, typer.Option("--params", "-p", help="Robot parameter set name or TOML path.")
+]
+EnvironmentOption = Annotated[str, typer.Option(help="flat, block, ramp or rough.")]
+SeedOption = Annotated[int, typer.Option(help="Seed of the rough terrain.")]
+#: A phase of simulated time [s] in [0, 3600 s].
+PHASE_TIME = Bounds(0.0, MAX_SIMULATED_TIME, "s", lower_inclusive=True)
+
+
+def _within(lower: float, upper: float,
+            unit: str = "") -> Callable[[float | int | None], float | int | None]:
+    """Typer callback: a finite number within [lower, upper] (see :class:`Bounds`)."""
+    return option_range(Bounds(lower, upper, unit, lower_inclusive=True))
+VideoOption = Annotated[
+    bool, typer.Option("--video/--no-video", help="Render video.mp4, a GIF and first-frame.png.")
+]
+
+
+def _simulation(params: str, overrides: list[str] | None, configuration: str,
+                environment: str = "flat", seed: int = 0, supply: str | None = None):
+    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.robot.simulation import RobotSimulation
+
+    robot = build_robot(load_robot(params, overrides or []), configuration, environment, seed)
+    return RobotSimulation(robot, supply=supply)
+
+
+def _run(simulation, phases, folder_option: Path | None, kind: str, description: str,
+         video: bool, joints: list[str] | None = None) -> Path:
+    from pneumaquad.io.recording import create_run_folder
+    from pneumaquad.reporting.robot_plots import plot_body, plot_joints
+    from pneumaquad.robot.experiment import run_phases
+
+    folder = create_run_folder(folder_option, kind)
+    with progress_bar(kind) as update:
+        run = run_phases(simulation, phases, folder, description,
+                         lambda done, total: update(int(done * 1000), int(total * 1000)))
+    robot = simulation.robot
+    leg_joints = joints or [n for n in robot.joint_names if n.startswith("front_right")]
+    if run.recording["time [s]"].size > 1:
+        plot_joints(run.recording, leg_joints, folder / "joints.png", description)
+        if robot.free:
+            plot_body(run.recording, robot.legs, folder / "body.png", description)
+    if video:
+        _render(folder)
+    else:
+        _first_frame(folder)
+    summary = dict(run.summary)
+    console.print(f"run folder: [bold]{folder}[/bold]")
+    for key in ("simulated time [s]", "wall time [s]", "real-time factor", "air consumed [NL]",
+                "mean air flow [NL/min]", "tank endurance at this mean flow [s]"):
+        console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
+    for name, phase in summary["phases"].items():
+        console.print(
+            f"  phase {name}: {phase['duration [s]']:.3g} s, air "
+            f"{phase['mean air flow [NL/min]']:.3g} NL/min, tank lasts "
+            f"{phase['tank endurance at this flow [s]'] / 60.0:.4g} min",
+            markup=False, highlight=False,
+        )
+    for joint, error in summary["angle rmse [deg]"].items():
+        if joint in leg_joints:
+            console.print(f"  {joint} angle rmse [deg]: {error:.3g}", markup=False,
+                          highlight=False)
+    if summary.get("interrupted"):
+        finish_run(folder, summary)
+    return folder
+
+
+def _check_environment(environment: str) -> None:
+    from pneumaquad.robot.environment import ENVIRONMENTS
+
+    if environment not in ENVIRONMENTS:
+        raise typer.BadParameter(f"{environment!r}: expected one of {', '.join(ENVIRONMENTS)}",
+                                 param_hint="--environment")
+
+
+def _first_frame(folder: Path) -> None:
+    from pneumaquad.robot.video import RenderingUnavailableError, render_first_frame
+
+    try:
+        render_first_frame(folder)
+    except RenderingUnavailableError as error:
+        console.print(f"[yellow]no first-frame.png: {error}[/yellow]")
+
+
+def _render(folder: Path, fps: int = 30, width: int = 640, height: int = 480) -> None:
+    from pneumaquad.robot.video import RenderingUnavailableError, render_run_video
+
+    try:
+        files = render_run_video(folder, fps=fps, width=width, height=height)
+    except RenderingUnavailableError as error:
+        console.print(f"[yellow]no video: {error}[/yellow]")
+        return
+    console.print(f"video: {files.mp4}")
+
+
+@leg_app.command("validate")
+def leg_validate(
+    joint: Annotated[
+        str, typer.Option(help="Tested joint: alpha, beta, gamma, or all.")
+    ] = "gamma",
+    signal: Annotated[
+        str, typer.Option(help="steps, trapezoid, slow-sine, fast-sine, or all.")
+    ] = "steps",
+    settle: Annotated[float, typer.Option(
+        help="Open-loop extension phase [s], 0 to 3600.", callback=option_range(PHASE_TIME))
+    ] = 2.0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    video: VideoOption = False,
+) -> None:
+    """Thesis 5.5.2: one joint of the front-right leg follows a test signal.
+
+    With ``all`` for the joint and/or the signal, every combination runs, each in its own
+    sub-folder of the output folder (``<joint>-<signal>``).
+    """
+    from pneumaquad.io.recording import create_run_folder
+    from pneumaquad.robot.scenarios import LEG_SIGNALS, leg_validation_phases
+
+    if joint not in (*JOINT_NAMES, "all"):
+        raise typer.BadParameter(f"{joint!r}: expected one of {', '.join(JOINT_NAMES)} or all",
+                                 param_hint="--joint")
+    if signal not in (*LEG_SIGNALS, "all"):
+        raise typer.BadParameter(f"{signal!r}: expected one of {', '.join(LEG_SIGNALS)} or all",
+                                 param_hint="--signal")
+    joints = JOINT_NAMES if joint == "all" else (joint,)
+    signals = LEG_SIGNALS if signal == "all" else (signal,)
+    several = len(joints) * len(signals) > 1
+    base = create_run_folder(output, f"leg-{joint}-{signal}") if several else output
+    for tested in joints:
+        for kind in signals:
+            simulation = _simulation(params, overrides, "fixed")
+            phases = leg_validation_phases(simulation, tested, kind, settle)
+            folder = base / f"{tested}-{kind}" if several else output
+            _run(simulation, phases, folder, f"leg-{tested}-{kind}",
+                 f"front-right {tested}: {kind}", video)
+
+
+@leg_app.command("foot-cycle")
+def leg_foot_cycle(
+    rate: Annotated[str, typer.Option(help="slow, medium, fast or all.")] = "all",
+    cycles: Annotated[int, typer.Option(help="Cycles per rate, 1 to 1000.",
+                                        callback=_within(1, 1000))] = 3,
+    alpha_gain_scale: Annotated[
+        float, typer.Option(help="Alpha PID gain scale (thesis: 0.75), 0 to 100.",
+                            callback=_within(0.0, 100.0))
+    ] = 1.0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    video: VideoOption = False,
+) -> None:
+    """Thesis 5.5.2.4: the walking-like foot cycle of the front-right leg through IK."""
+    from pneumaquad.robot.scenarios import FOOT_CYCLE_PERIODS, foot_cycle_phases
+
+    rates = tuple(FOOT_CYCLE_PERIODS) if rate == "all" else (rate,)
+    if any(r not in FOOT_CYCLE_PERIODS for r in rates):
+        raise typer.BadParameter(f"{rate!r}: expected slow, medium, fast or all",
+                                 param_hint="--rate")
+    settings = [*(overrides or []), f"controller.alpha.gain_scale={alpha_gain_scale!r}"]
+    simulation = _simulation(params, settings, "fixed")
+    phases = foot_cycle_phases(simulation, rates, cycles)
+    _run(simulation, phases, output, f"foot-cycle-{rate}",
+         f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", video)
+
+
+@robot_app.command("stand")
+def robot_stand(
+    hold: Annotated[float, typer.Option(help="Holding time after rising [s], 0 to 3600.",
+                                        callback=option_range(PHASE_TIME))] = 3.0,
+    posture: Annotated[
+        bool, typer.Option("--posture/--no-posture", help="Body height/roll/pitch commands.")
+    ] = True,
+    environment: EnvironmentOption = "flat",
+    configuration: Annotated[
+        str, typer.Option(help="quadruped, or testbed (front legs, rear on wheels).")
+    ] = "quadruped",
+    supply: Annotated[str | None, typer.Option(help="Override supply: ideal or tank.")] = None,
+    seed: SeedOption = 0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    video: VideoOption = True,
+) -> None:
+    """The quadruped stands up from lying on the ground, holds, follows body commands."""
+    from pneumaquad.robot.scenarios import stand_up_phases
+
+    if supply not in (None, "ideal", "tank"):
+        raise typer.BadParameter(f"{supply!r}: expected ideal or tank", param_hint="--supply")
+    if configuration not in ("quadruped", "testbed"):
+        raise typer.BadParameter(f"{configuration!r}: expected quadruped or testbed",
+                                 param_hint="--configuration")
+    _check_environment(environment)
+    simulation = _simulation(params, overrides, configuration, environment, seed, supply)
+    phases = stand_up_phases(simulation, hold=hold, posture=posture)
+    _run(simulation, phases, output, f"{configuration}-stand",
+         f"{configuration}: stand up and hold", video)
+
+
+@robot_app.command("walk")
+def robot_walk(
+    distance: Annotated[float, typer.Option(help="Distance to walk [m], 0.01 to 100.",
+                                            callback=_within(0.01, 100.0, "m"))] = 1.0,
+    speed: Annotated[float, typer.Option(help="Body speed [m/s], 0.001 to 1.",
+                                         callback=_within(0.001, 1.0, "m/s"))] = 0.02,
+    heading: Annotated[float, typer.Option(
+        help="Walking direction, CCW from forward [deg], -360 to 360.",
+        callback=_within(-360.0, 360.0, "deg"))] = 0.0,
+    duty_factor: Annotated[float, typer.Option(help="Stance fraction, 0.75 to 0.99.",
+                                               callback=_within(0.75, 0.99))] = 0.9,
+    period: Annotated[float, typer.Option(help="Gait cycle [s], 0.5 to 600.",
+                                          callback=_within(0.5, 600.0, "s"))] = 8.0,
+    margin: Annotated[float, typer.Option(help="Planned static margin [m], 0 to 1.",
+                                          callback=_within(0.0, 1.0, "m"))] = 0.06,
+    step_height: Annotated[float, typer.Option(help="Foot lift at mid-swing [m], 0 to 0.5.",
+                                               callback=_within(0.0, 0.5, "m"))] = 0.04,
+    lift_fraction: Annotated[float, typer.Option(
+        callback=_within(0.0, 0.49), help="Share of the swing, at each end, spent only "
+        "lifting or lowering the foot, 0 to 0.49.")] = 0.25,
+    transfer_gap: Annotated[float, typer.Option(
+        callback=_within(0.0, 0.5), help="Cycle fraction with four feet down between a rear "
+        "touchdown and the front lift-off (load transfer), 0 to 0.5.")] = 0.04,
+    stance_control: Annotated[bool, typer.Option(
+        "--stance-control/--no-stance-control",
+        help="Force-controlled stance: each stance leg's cylinders track the load "
+             "statics gives it (locomotion.stance_control); off: plain position control.")]
+    = True,
+    force_gain: Annotated[float, typer.Option(
+        callback=_within(1e-6, 1.0, "V/N"),
+        help="Force tracking gain of the stance cylinders [V/N], 1e-6 to 1.")] = 0.015,
+    swing_from_ground: Annotated[bool, typer.Option(
+        "--swing-from-ground/--swing-from-body",
+        help="Swing height above the ground at lift-off (locomotion.swing_control), or "
+             "relative to the body as planned.")] = True,
+    heading_hold: Annotated[bool, typer.Option(
+        "--heading-hold/--no-heading-hold",
+        help="Hold the initial heading (locomotion.heading_control).")] = True,
+    environment: EnvironmentOption = "flat",
+    seed: SeedOption = 0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+    output: OutputOption = None,
+    video: VideoOption = True,
+) -> None:
+    """The quadruped stands up and walks a statically stable crawl (lateral-sequence wave
+    gait, duty factor >= 0.75); reports success or failure with the reason."""
+    import json
+    import math
+
+    from pneumaquad.locomotion.stance_control import StanceControlSettings
+    from pneumaquad.locomotion.walking import WalkSettings, walking_outcome, walking_phases
+
+    _check_environment(environment)
+    if distance / speed > MAX_SIMULATED_TIME:
+        raise typer.BadParameter(
+            f"walking {distance:g} m at {speed:g} m/s takes {distance / speed:.4g} s; expected "
+            f"at most {MAX_SIMULATED_TIME:g} s of walking", param_hint="--distance / --speed")
+    largest_gap = 2.0 * duty_factor - 1.5
+    if transfer_gap > largest_gap + 1e-12:
+        raise typer.BadParameter(
+            f"{transfer_gap:g} does not fit: a side's two swings and the gap take "
+            f"2·(1 − duty factor) + gap ≤ 0.5 of the cycle, so with duty factor "
+            f"{duty_factor:g} the gap is at most {max(largest_gap, 0.0):.3g}",
+            param_hint="--transfer-gap")
+    stance = StanceControlSettings(force_gain=force_gain) if stance_control else None
+    settings = WalkSettings(speed=speed, heading=math.radians(heading),
+                            duty_factor=duty_factor, period=period, minimum_margin=margin,
+                            distance=distance, step_height=step_height,
+                            lift_fraction=lift_fraction, transfer_gap=transfer_gap,
+                            swing_from_ground=swing_from_ground,
+                            heading_hold=heading_hold, stance_control=stance)
+    simulation = _simulation(params, overrides, "quadruped", environment, seed)
+    try:
+        phases, plan = walking_phases(simulation, settings)
+    except ValueError as error:  # settings the gait cannot meet (no sway window, margin)
+        raise typer.BadParameter(f"the gait cannot be planned: {error}",
+                                 param_hint="--duty-factor, --margin or --transfer-gap"
+                                 ) from None
+    folder = _run(simulation, phases, output, f"walk-{environment}",
+                  f"quadruped: walk {distance:g} m on {environment}", video)
+    from pneumaquad.io.recording import read_recording
+    from pneumaquad.locomotion.walking import tip_over_series
+    from pneumaquad.reporting.robot_plots import plot_walking
+
+    summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+    recording = read_recording(folder)
+    if "walk" not in summary["phases"]:
+        console.print("walking: not judged (the run stopped before the walk began)")
+        return
+    tip_over = tip_over_series(recording, summary, simulation.robot, plan)
+    outcome = walking_outcome(recording, summary, settings, simulation.robot, tip_over)
+    plot_walking(recording, simulation.robot.legs, folder / "walking.png", tip_over,
+                 f"walk {distance:g} m on {environment}")
+    outcome["planned smallest static margin [m]"] = float(plan.margins.min())
+    outcome["planned unreachable IK samples [count]"] = int(
+        sum(plan.cycle.unreachable_counts.values()))
+    summary["walking"] = outcome
+    (folder / "summary.json").write_text(json.dumps(summary, indent=2, default=str),
+                                         encoding="utf-8")
+    verdict = "success" if outcome["success"] else "failure"
+    console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
+                  f"travelled {outcome['distance travelled [m]']:.3f} m of {distance:g} m, "
+                  f"air {outcome['air per metre [NL/m]']:.3g} NL/m; negative static margin "
+                  f"{outcome['time with negative static margin [%]']:.0f} % of the time "
+                  f"(loaded feet), tip-over margin "
+                  f"{outcome['time with negative tip-over margin [%]']:.1f} % (median "
+                  f"{outcome['median tip-over margin [m]'] * 1000:.0f} mm); stance feet slid "
+                  f"{outcome['largest stance-foot slide [m]']:.2f} m")
+
+
+@robot_app.command("export")
+def robot_export(
+    path: Annotated[Path, typer.Argument(help="MJCF file to write.")],
+    configuration: Annotated[str, typer.Option(help="quadruped, fixed or testbed.")] = (
+        "quadruped"
+    ),
+    environment: EnvironmentOption = "flat",
+    seed: SeedOption = 0,
+    params: RobotParamsOption = "crr-quadruped",
+    overrides: SetOption = None,
+) -> None:
+    """Write the MuJoCo model as MJCF (open it with `python -m mujoco.viewer`)."""
+    from pneumaquad.robot.builder import CONFIGURATIONS, build_robot
+
+    _check_environment(environment)
+    if configuration not in CONFIGURATIONS:
+        raise typer.BadParameter(
+            f"{configuration!r}: expected one of {', '.join(CONFIGURATIONS)}",
+            param_hint="--configuration",
+        )
+    robot = build_robot(load_robot(params, overrides or []), configuration, environment, seed)
+    path.write_text(robot.to_xml(), encoding="utf-8")
+    console.print(f"wrote {path}")
+
+
+@robot_app.command("geometry")
+def robot_geometry(
+    params: RobotParamsOption = "crr-quadruped", overrides: SetOption = None
+) -> None:
+    """Print the cylinder linkages (l1, l2, l3, γ0) and the DH table of a leg."""
+    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.robot.kinematics import format_dh_table
+    from pneumaquad.robot.legs import leg_dh_table
+    from pneumaquad.robot.linkage import moment_arm
+
+    robot = build_robot(load_robot(params, overrides or []), "fixed")
+    for name in JOINT_NAMES:
+        link = robot.linkages[name]
+        joint = getattr(robot.parameters.leg, name)
+        arms = np.abs(moment_arm(link, np.linspace(joint.lower_limit, joint.upper_limit, 50)))
+        console.print(
+            f"{name}: l3 (barrel) {link.parent_pivot_radius * 1e3:.1f} mm, l1 (rod pin) "
+            f"{link.child_pivot_radius * 1e3:.1f} mm, l2 (retracted) "
+            f"{link.retracted_length * 1e3:.1f} mm, "
+            f"γ0 {math.degrees(link.included_angle_at_zero):.1f}°, "
+            f"moment arm {arms.min() * 1e3:.1f}-{arms.max() * 1e3:.1f} mm",
+            highlight=False,
+        )
+    console.print(format_dh_table(leg_dh_table(robot, "front_right")), highlight=False)
+
+
+def video_command(
+    run: Annotated[Path, typer.Argument(help="Run folder with model.xml and trajectory.npz.")],
+    fps: Annotated[int, typer.Option(help="Frames per second, 1 to 240.",
+                                     callback=_within(1, 240))] = 30,
+    width: Annotated[int, typer.Option(help="Pixels, 16 to 7680.",
+                                       callback=_within(16, 7680))] = 640,
+    height: Annotated[int, typer.Option(help="Pixels, 16 to 4320.",
+                                        callback=_within(16, 4320))] = 480,
+) -> None:
+    """Render a robot run offscreen to MP4, a GIF preview and first-frame.png."""
+    _render(run, fps, width, height)

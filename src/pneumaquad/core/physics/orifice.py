@@ -1,0 +1,307 @@
+"""Compressible mass flow through a valve orifice (thesis eq 4.1.1–4.1.9, ISO 6358).
+
+Sign convention: a flow from side *a* to side *b* is positive. The direction follows the
+pressures, and the upstream temperature is taken from whichever side is upstream.
+"""
+
+import math
+
+from pneumaquad.core.jit import compiled
+
+#: ISO 8778 standard reference atmosphere (ANR) used by ISO 6358: density [kg/m^3].
+ISO_REFERENCE_DENSITY = 1.185
+#: ISO 8778 reference temperature [K].
+ISO_REFERENCE_TEMPERATURE = 293.15
+
+
+@compiled
+def orifice_coefficients(heat_capacity_ratio: float, gas_constant: float) -> tuple[float, float]:
+    """Flow constants C1 (unchoked) and C2 (choked) of eq 4.1.8 and 4.1.9.
+
+    Parameters
+    ----------
+    heat_capacity_ratio : float
+        k [-], 1.4 for air.
+    gas_constant : float
+        Specific gas constant R [J/(kg K)], 287 for air.
+
+    Returns
+    -------
+    (C1, C2) : tuple of float
+        C1 = sqrt(2k / (R (k-1))), C2 = sqrt(k / (R ((k+1)/2)^((k+1)/(k-1)))) [sqrt(kg K / J)].
+    """
+    k = heat_capacity_ratio
+    c1 = math.sqrt(2.0 * k / (gas_constant * (k - 1.0)))
+    c2 = math.sqrt(k / (gas_constant * ((k + 1.0) / 2.0) ** ((k + 1.0) / (k - 1.0))))
+    return c1, c2
+
+
+@compiled
+def orifice_flux(
+    upstream_pressure: float,
+    downstream_pressure: float,
+    upstream_temperature: float,
+    heat_capacity_ratio: float,
+    c1: float,
+    c2: float,
+    critical_ratio: float,
+    laminar_ratio: float,
+) -> float:
+    """Mass flux per unit effective area, Psi of eq 4.1.5 (unchoked) and 4.1.6 (choked).
+
+    Parameters
+    ----------
+    upstream_pressure, downstream_pressure : float
+        Absolute pressures Pu >= Pd [Pa].
+    upstream_temperature : float
+        Tu [K].
+    heat_capacity_ratio : float
+        k [-].
+    c1, c2 : float
+        Constants of eq 4.1.8–4.1.9 (see :func:`orifice_coefficients`).
+    critical_ratio : float
+        Pd/Pu at and below which the flow is choked (0.528 for air, eq 4.1.4) [-].
+    laminar_ratio : float
+        Above this pressure ratio the flux falls linearly to zero at ratio 1 instead of
+        following eq 4.1.5, whose slope is infinite there. This laminar regularisation
+        bounds the stiffness of the chamber equations; 0.999 changes flows only where the
+        pressure difference is below 0.1 % [-].
+
+    Returns
+    -------
+    float
+        Psi [kg/(s m^2)]; multiply by the effective area A(u)·cd (eq 4.1.1).
+    """
+    if upstream_pressure <= 0.0:
+        return 0.0
+    ratio = downstream_pressure / upstream_pressure
+    scale = upstream_pressure / math.sqrt(upstream_temperature)
+    if ratio <= critical_ratio:
+        return c2 * scale
+    if ratio >= 1.0:
+        return 0.0
+    inverse_k = 1.0 / heat_capacity_ratio
+    if ratio > laminar_ratio:
+        power = laminar_ratio**inverse_k
+        at_limit = c1 * scale * power * math.sqrt(1.0 - laminar_ratio / power)
+        return at_limit * (1.0 - ratio) / (1.0 - laminar_ratio)
+    power = ratio**inverse_k
+    # ratio**((k-1)/k) == ratio / ratio**(1/k): one power evaluation instead of two.
+    return c1 * scale * power * math.sqrt(1.0 - ratio / power)
+
+
+@compiled
+def orifice_mass_flow(
+    effective_area: float,
+    pressure_a: float,
+    pressure_b: float,
+    temperature_a: float,
+    temperature_b: float,
+    heat_capacity_ratio: float,
+    c1: float,
+    c2: float,
+    critical_ratio: float,
+    laminar_ratio: float,
+) -> float:
+    """Signed mass flow from side a to side b through an orifice (eq 4.1.1–4.1.6).
+
+    Parameters
+    ----------
+    effective_area : float
+        Equivalent area cd·A(u) [m^2], >= 0.
+    pressure_a, pressure_b : float
+        Absolute pressures on both sides [Pa].
+    temperature_a, temperature_b : float
+        Gas temperatures on both sides [K]; the upstream one is used.
+    heat_capacity_ratio, c1, c2, critical_ratio, laminar_ratio : float
+        See :func:`orifice_flux`.
+
+    Returns
+    -------
+    float
+        Mass flow [kg/s], positive from a to b.
+    """
+    if pressure_a >= pressure_b:
+        upstream_temperature = laminar_temperature(
+            pressure_a, pressure_b, temperature_a, temperature_b, laminar_ratio
+        )
+        return effective_area * orifice_flux(
+            pressure_a,
+            pressure_b,
+            upstream_temperature,
+            heat_capacity_ratio,
+            c1,
+            c2,
+            critical_ratio,
+            laminar_ratio,
+        )
+    upstream_temperature = laminar_temperature(
+        pressure_b, pressure_a, temperature_b, temperature_a, laminar_ratio
+    )
+    return -effective_area * orifice_flux(
+        pressure_b,
+        pressure_a,
+        upstream_temperature,
+        heat_capacity_ratio,
+        c1,
+        c2,
+        critical_ratio,
+        laminar_ratio,
+    )
+
+
+@compiled
+def laminar_temperature(
+    upstream_pressure: float,
+    downstream_pressure: float,
+    upstream_temperature: float,
+    downstream_temperature: float,
+    laminar_ratio: float,
+) -> float:
+    """Temperature to use for the flow: upstream, blended to the mean in the laminar band.
+
+    In the laminar band the flux is linear in the pressure difference divided by
+    sqrt(T). Moving T from the upstream value at the band's edge to the mean of both
+    sides at equal pressures makes the flow smooth through zero, where a chamber at
+    equilibrium sits; with the upstream temperature alone its slope would jump there
+    (by sqrt(T_a/T_b)), which stalls implicit solvers. Outside the band it is the
+    upstream temperature (eq 4.1.5–4.1.6, App. B.1.2 Port_2 l.52–62).
+
+    Parameters
+    ----------
+    upstream_pressure, downstream_pressure : float
+        Pu >= Pd [Pa].
+    upstream_temperature, downstream_temperature : float
+        [K].
+    laminar_ratio : float
+        Start of the laminar band [-].
+
+    Returns
+    -------
+    float
+        Temperature [K].
+    """
+    if upstream_pressure <= 0.0:
+        return upstream_temperature
+    ratio = downstream_pressure / upstream_pressure
+    if ratio <= laminar_ratio:
+        return upstream_temperature
+    weight = min((ratio - laminar_ratio) / (1.0 - laminar_ratio), 1.0)
+    mean = 0.5 * (upstream_temperature + downstream_temperature)
+    return upstream_temperature + (mean - upstream_temperature) * weight
+
+
+@compiled
+def iso6358_flux(
+    upstream_pressure: float,
+    downstream_pressure: float,
+    upstream_temperature: float,
+    critical_ratio: float,
+    laminar_ratio: float,
+) -> float:
+    """ISO 6358 mass flow per unit sonic conductance.
+
+    m_dot = C · rho0 · Pu · sqrt(T0/Tu) · phi, with phi = 1 when Pd/Pu <= b and
+    phi = sqrt(1 - ((Pd/Pu - b)/(1 - b))^2) otherwise (ISO 6358-1).
+
+    Parameters
+    ----------
+    upstream_pressure, downstream_pressure : float
+        Absolute pressures Pu >= Pd [Pa].
+    upstream_temperature : float
+        Tu [K].
+    critical_ratio : float
+        b [-], 0 <= b < 1.
+    laminar_ratio : float
+        Linear fall to zero above this ratio, as in :func:`orifice_flux` [-].
+
+    Returns
+    -------
+    float
+        Mass flow per conductance [kg/s per m^3/(s Pa)].
+    """
+    if upstream_pressure <= 0.0:
+        return 0.0
+    ratio = downstream_pressure / upstream_pressure
+    scale = (
+        ISO_REFERENCE_DENSITY
+        * upstream_pressure
+        * math.sqrt(ISO_REFERENCE_TEMPERATURE / upstream_temperature)
+    )
+    if ratio <= critical_ratio:
+        return scale
+    if ratio >= 1.0:
+        return 0.0
+    if ratio > laminar_ratio:
+        shape = (laminar_ratio - critical_ratio) / (1.0 - critical_ratio)
+        at_limit = scale * math.sqrt(1.0 - shape * shape)
+        return at_limit * (1.0 - ratio) / (1.0 - laminar_ratio)
+    shape = (ratio - critical_ratio) / (1.0 - critical_ratio)
+    return scale * math.sqrt(1.0 - shape * shape)
+
+
+@compiled
+def iso6358_mass_flow(
+    sonic_conductance: float,
+    pressure_a: float,
+    pressure_b: float,
+    temperature_a: float,
+    temperature_b: float,
+    critical_ratio: float,
+    laminar_ratio: float,
+) -> float:
+    """Signed ISO 6358 mass flow from side a to side b.
+
+    Parameters
+    ----------
+    sonic_conductance : float
+        C [m^3/(s Pa)], >= 0 (datasheets give dm^3/(s bar) = 1e-8 m^3/(s Pa)).
+    pressure_a, pressure_b : float
+        Absolute pressures [Pa].
+    temperature_a, temperature_b : float
+        Temperatures [K]; the upstream one is used.
+    critical_ratio : float
+        b [-].
+    laminar_ratio : float
+        See :func:`iso6358_flux`.
+
+    Returns
+    -------
+    float
+        Mass flow [kg/s], positive from a to b.
+    """
+    if pressure_a >= pressure_b:
+        upstream_temperature = laminar_temperature(
+            pressure_a, pressure_b, temperature_a, temperature_b, laminar_ratio
+        )
+        return sonic_conductance * iso6358_flux(
+            pressure_a, pressure_b, upstream_temperature, critical_ratio, laminar_ratio
+        )
+    upstream_temperature = laminar_temperature(
+        pressure_b, pressure_a, temperature_b, temperature_a, laminar_ratio
+    )
+    return -sonic_conductance * iso6358_flux(
+        pressure_b, pressure_a, upstream_temperature, critical_ratio, laminar_ratio
+    )
+
+
+@compiled
+def area_to_sonic_conductance(effective_area: float, c2: float) -> float:
+    """Sonic conductance with the same choked flow as an orifice of a given area.
+
+    Equating A·C2·Pu/sqrt(Tu) (eq 4.1.6) with C·rho0·Pu·sqrt(T0/Tu) gives
+    C = A·C2 / (rho0·sqrt(T0)).
+
+    Parameters
+    ----------
+    effective_area : float
+        cd·A [m^2].
+    c2 : float
+        Choked-flow constant of eq 4.1.9.
+
+    Returns
+    -------
+    float
+        C [m^3/(s Pa)].
+    """
+    return effective_area * c2 / (ISO_REFERENCE_DENSITY * math.sqrt(ISO_REFERENCE_TEMPERATURE))

@@ -1,0 +1,1 @@
+"""The representative run behind ``pneumaquad demo`` and its report sections."""

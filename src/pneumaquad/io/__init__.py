@@ -1,0 +1,2 @@
+"""Run folders and recordings (one writer, one reader), lab-data import and the
+interruption handling that keeps a recording readable."""

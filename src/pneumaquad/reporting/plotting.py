@@ -1,0 +1,198 @@
+"""Figures of rig runs in the style of Daepp (2011), figures 25-28.
+
+Recordings are mappings of SI column names (``"time [s]"``, ``"position [m]"``,
+``"cap pressure [Pa]"``, ...) to arrays. The thesis plots position in inches
+and pressures in psia, so conversion to those units happens here and only here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import matplotlib
+
+from pneumaquad.params.conversions import METRE_PER_INCH, PASCAL_PER_PSI
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+DPI = 150
+
+TIME = "time [s]"
+COMMAND = "command [V]"
+REFERENCE = "reference position [m]"
+POSITION = "position [m]"
+VELOCITY = "velocity [m/s]"
+CAP_PRESSURE = "cap pressure [Pa]"
+ROD_PRESSURE = "rod pressure [Pa]"
+SUPPLY_PRESSURE = "supply pressure [Pa]"
+FRICTION_FORCE = "friction force [N]"
+PNEUMATIC_FORCE = "pneumatic force [N]"
+AIR_CONSUMED = "air consumed [NL]"
+
+Recording = Mapping[str, np.ndarray]
+
+
+def metres_to_inches(value: np.ndarray) -> np.ndarray:
+    """Convert lengths from m to in."""
+    return np.asarray(value, dtype=float) / METRE_PER_INCH
+
+
+def pascals_to_psi(value: np.ndarray) -> np.ndarray:
+    """Convert (absolute) pressures from Pa to psi (psia)."""
+    return np.asarray(value, dtype=float) / PASCAL_PER_PSI
+
+
+def _column(recording: Recording, name: str) -> np.ndarray | None:
+    values = recording.get(name)
+    if values is None:
+        return None
+    values = np.asarray(values, dtype=float)
+    return values if values.size else None
+
+
+def _time(recording: Recording) -> np.ndarray:
+    time = _column(recording, TIME)
+    if time is None:
+        raise KeyError(f"recording has no {TIME!r} column")
+    return time
+
+
+def _finish(
+    fig: Figure, axes: list[Axes], path: Path, title: str, xlabel: str = "Time (s)"
+) -> Path:
+    for ax in axes:
+        ax.grid(True, alpha=0.35)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="best", fontsize="small", framealpha=0.85)
+    axes[-1].set_xlabel(xlabel)
+    if title:
+        fig.suptitle(title)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=DPI)
+    plt.close(fig)
+    return path
+
+
+def plot_rig_run(recording: Recording, path: Path, title: str = "") -> Path:
+    """Plot one rig run: position, chamber pressures and valve command vs time.
+
+    Parameters
+    ----------
+    recording
+        Column name → array; only ``"time [s]"`` is required.
+    path
+        Output PNG path (parent folders are created).
+    title
+        Figure title.
+
+    Returns
+    -------
+    Path
+        The written PNG.
+    """
+    time = _time(recording)
+    fig, axes = plt.subplots(
+        3, 1, sharex=True, figsize=(8, 8), height_ratios=[3, 3, 1.6], layout="constrained"
+    )
+    ax_pos, ax_p, ax_u = axes
+
+    position = _column(recording, POSITION)
+    if position is not None:
+        ax_pos.plot(time, metres_to_inches(position), color="C0", lw=1.6, label="Position")
+    reference = _column(recording, REFERENCE)
+    if reference is not None and bool(np.any(np.isfinite(reference))):
+        ax_pos.plot(
+            time, metres_to_inches(reference), color="k", ls="--", lw=1.1, label="Reference"
+        )
+    ax_pos.set_ylabel("Position (in)")
+
+    cap = _column(recording, CAP_PRESSURE)
+    if cap is not None:
+        ax_p.plot(time, pascals_to_psi(cap), color="C3", lw=1.5, label="Cap chamber")
+    rod = _column(recording, ROD_PRESSURE)
+    if rod is not None:
+        ax_p.plot(time, pascals_to_psi(rod), color="C2", lw=1.5, label="Rod chamber")
+    supply = _column(recording, SUPPLY_PRESSURE)
+    if supply is not None:
+        ax_p.plot(
+            time, pascals_to_psi(supply), color="0.35", lw=0.9, ls=":", zorder=3, label="Supply"
+        )
+    ax_p.set_ylabel("Pressure (psia)")
+
+    command = _column(recording, COMMAND)
+    if command is not None:
+        ax_u.plot(time, command, color="C4", lw=1.3, label="Valve command")
+    ax_u.set_ylabel("Command (V)")
+
+    return _finish(fig, list(axes), path, title)
+
+
+def plot_comparison(recordings: Mapping[str, Recording], path: Path, title: str = "") -> Path:
+    """Overlay several runs: position (in) and cap/rod pressures (psia) vs time.
+
+    Each run gets one colour; cap pressure is solid and rod pressure dashed.
+
+    Parameters
+    ----------
+    recordings
+        Run label → recording (e.g. ``{"measured": ..., "simulated": ...}``).
+    path
+        Output PNG path.
+    title
+        Figure title.
+    """
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
+    ax_pos, ax_p = axes
+    for index, (label, recording) in enumerate(recordings.items()):
+        colour = f"C{index % 10}"
+        time = _time(recording)
+        position = _column(recording, POSITION)
+        if position is not None:
+            ax_pos.plot(time, metres_to_inches(position), color=colour, lw=1.5, label=label)
+        cap = _column(recording, CAP_PRESSURE)
+        if cap is not None:
+            ax_p.plot(time, pascals_to_psi(cap), color=colour, lw=1.4, label=f"{label} cap")
+        rod = _column(recording, ROD_PRESSURE)
+        if rod is not None:
+            ax_p.plot(
+                time, pascals_to_psi(rod), color=colour, lw=1.4, ls="--", label=f"{label} rod"
+            )
+    ax_pos.set_ylabel("Position (in)")
+    ax_p.set_ylabel("Pressure (psia)")
+    return _finish(fig, list(axes), path, title)
+
+
+def plot_friction_curve(
+    curves: Mapping[str, tuple[np.ndarray, np.ndarray]],
+    path: Path,
+    title: str = "",
+) -> Path:
+    """Plot friction force against piston velocity for one or more models.
+
+    Parameters
+    ----------
+    curves
+        Label → ``(velocity [m/s], friction force [N])``. Points are sorted by
+        velocity before plotting.
+    path
+        Output PNG path.
+    title
+        Figure title.
+    """
+    fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
+    for label, (velocity, force) in curves.items():
+        v = np.asarray(velocity, dtype=float)
+        f = np.asarray(force, dtype=float)
+        order = np.argsort(v, kind="stable")
+        ax.plot(v[order], f[order], lw=1.5, label=label)
+    ax.axhline(0.0, color="0.5", lw=0.6)
+    ax.axvline(0.0, color="0.5", lw=0.6)
+    ax.set_ylabel("Friction force (N)")
+    return _finish(fig, [ax], path, title, xlabel="Velocity (m/s)")

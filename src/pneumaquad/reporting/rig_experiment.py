@@ -1,0 +1,87 @@
+"""A rig experiment end to end: run folder, recording, summary and plot."""
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pneumaquad.io.recording import RunRecorder, write_summary
+from pneumaquad.params import resolved_parameters_toml
+from pneumaquad.params.schema import RigSetup
+from pneumaquad.reporting.plotting import plot_rig_run
+from pneumaquad.rig.metrics import general_metrics, step_metrics, tracking_metrics
+from pneumaquad.rig.simulate import RIG_COLUMNS, RigDivergedError, RigResult, simulate_rig
+
+
+def run_rig_experiment(
+    setup: RigSetup,
+    folder: Path,
+    signal: np.ndarray,
+    closed_loop: bool,
+    description: str,
+    step_time: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    extra: dict[str, Any] | None = None,
+) -> tuple[RigResult, dict[str, Any]]:
+    """Run one rig experiment and write its run folder.
+
+    The folder receives ``parameters.toml`` (resolved, SI, loadable again),
+    ``recording.csv`` (flushed as the run goes) and ``recording.parquet``,
+    ``summary.json`` and ``rig.png`` (position, pressures and command, like thesis
+    figures 25–28). An interrupted run (Ctrl-C) still writes all of them for the part
+    that ran, with ``"interrupted": true`` in the summary. A run that goes non-finite
+    writes them for the rows before it, with the message under ``"error"`` in the
+    summary, and then raises.
+
+    Returns
+    -------
+    (RigResult, summary dict)
+
+    Raises
+    ------
+    RigDivergedError
+        After writing the folder, when a recorded value became non-finite.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "parameters.toml").write_text(resolved_parameters_toml(setup), encoding="utf-8")
+    failure: RigDivergedError | None = None
+    with RunRecorder(folder, RIG_COLUMNS) as recorder:
+        try:
+            result = simulate_rig(
+                setup, signal, closed_loop, recorder=recorder, progress=progress
+            )
+        except RigDivergedError as error:
+            failure, result = error, error.result
+    recording = result.recording
+    simulated = float(recording["time [s]"][-1]) if recording["time [s]"].size else 0.0
+    summary: dict[str, Any] = {
+        "description": description,
+        "parameter set": setup.actuator.meta.name,
+        "integrator": result.integrator,
+        "control step [s]": setup.simulation.control_step,
+        "substeps": setup.simulation.substeps,
+        "friction model": setup.actuator.friction.model,
+        "valve model": setup.actuator.valve.model,
+        "closed loop": closed_loop,
+        "interrupted": result.interrupted,
+        "steps": int(recording["time [s]"].size),
+        "wall time [s]": result.wall_time,
+        "real-time factor": simulated / result.wall_time if result.wall_time > 0 else math.nan,
+    }
+    if extra:
+        summary.update(extra)
+    if failure is not None:
+        summary["error"] = str(failure)
+    if recording["time [s]"].size:
+        summary.update(general_metrics(recording))
+        if failure is None and closed_loop:
+            summary.update(tracking_metrics(recording, setup.actuator.cylinder.stroke))
+        elif failure is None and step_time is not None:
+            summary.update(step_metrics(recording, step_time))
+        plot_rig_run(recording, folder / "rig.png", title=description)
+    write_summary(folder, summary)
+    if failure is not None:
+        raise failure
+    return result, summary
