@@ -1,8 +1,53 @@
-"""pneumaquad: simulator for pneumatically actuated legged robots."""
+"""pneumaquad: simulator for pneumatically actuated legged robots.
 
+The few names most work starts from are available here; each is loaded on first use, so
+``import pneumaquad`` stays quick and does not load MuJoCo or compile anything:
+
+- parameters: :func:`load_rig`, :func:`load_robot`, :func:`load_actuator`,
+  :func:`list_parameter_sets` (TOML with units, validated, SI inside);
+- the 1-DoF rig: :func:`simulate_rig` and the reference signals in :mod:`signals`;
+- the robot: :func:`build_robot` (MuJoCo model on the 12 cylinders) and
+  :class:`RobotSimulation` (the coupled actuator + MuJoCo step);
+- results: :func:`read_recording` (a recording file or a run folder's recording).
+
+Everything else lives in the layers listed in the README's "Layout".
+"""
+
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
 try:
     __version__ = version("pneumaquad")  # one source: pyproject.toml
 except PackageNotFoundError:  # pragma: no cover - run from a source tree, not installed
     __version__ = "0+unknown"
+
+#: public name -> module that defines it
+_PUBLIC = {
+    "load_rig": "pneumaquad.params.loader",
+    "load_robot": "pneumaquad.params.loader",
+    "load_actuator": "pneumaquad.params.loader",
+    "list_parameter_sets": "pneumaquad.params.loader",
+    "simulate_rig": "pneumaquad.rig.simulate",
+    "signals": "pneumaquad.rig.signals",
+    "build_robot": "pneumaquad.robot.builder",
+    "RobotSimulation": "pneumaquad.robot.simulation",
+    "read_recording": "pneumaquad.io.recording",
+}
+
+__all__ = ["__version__", *_PUBLIC]
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name from its module on first use (PEP 562)."""
+    module_name = _PUBLIC.get(name)
+    if module_name is None:
+        raise AttributeError(f"module 'pneumaquad' has no attribute {name!r}")
+    module = import_module(module_name)
+    value = module if module_name.rsplit(".", 1)[1] == name else getattr(module, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))
