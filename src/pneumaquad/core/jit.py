@@ -2,40 +2,109 @@
 
 ``error_model="numpy"`` lets float division by zero give inf/nan as in NumPy instead of
 a checked Python exception, which removes a branch from every division in the hot path;
-the physics functions guard their divisors explicitly where it matters. ``cache=True``
-keeps the compiled code on disk between runs.
+the physics functions guard their divisors explicitly where it matters.
 
-numba invalidates a cached function when its own source file changes, but not when a
-function it calls (and inlines) in another file changes. The cache therefore lives in a
-folder named by a hash of the whole package's source, so any edit or upgrade starts from
-a clean cache. It is under ``$NUMBA_CACHE_DIR`` if set, else ``~/.cache/pneumaquad``.
+The compiled code is kept on disk between runs. numba invalidates a cached function when
+its own source file changes, but not when a function it calls (and inlines) in another
+file changes. The package's functions are therefore cached in a folder named by a hash of
+the whole package's source, so any edit or upgrade starts from a clean cache:
+``<base>/numba-<hash>/``, where ``<base>`` is numba's own ``NUMBA_CACHE_DIR`` setting if
+one is given, else ``$XDG_CACHE_HOME/pneumaquad`` (``~/.cache/pneumaquad``).
+
+Only the functions decorated with :data:`compiled` use that folder: each gets its own
+numba cache object whose locator names it. numba's process-wide configuration
+(``numba.config.CACHE_DIR``, its list of cache locators) is left as it is, so other
+libraries' cached functions go where numba would put them without pneumaquad.
 """
 
+from __future__ import annotations
+
+import functools
 import hashlib
 import os
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, ClassVar
 
 import numba
 from numba import njit
+from numba.core.caching import (
+    CompileResultCacheImpl,
+    FunctionCache,
+    _CacheLocator,
+    _SourceFileBackedLocatorMixin,
+)
+from numba.core.dispatcher import Dispatcher
+
+#: the package folder (src/pneumaquad) whose source the cache folder is keyed by
+PACKAGE_FOLDER = Path(__file__).resolve().parents[1]
 
 
 def _source_hash() -> str:
     """Short hash of every Python file of the package (names and contents)."""
     digest = hashlib.sha256()
-    package = Path(__file__).resolve().parents[1]  # the whole pneumaquad package
-    for path in sorted(package.rglob("*.py")):
-        digest.update(path.relative_to(package).as_posix().encode())
+    for path in sorted(PACKAGE_FOLDER.rglob("*.py")):
+        digest.update(path.relative_to(PACKAGE_FOLDER).as_posix().encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
 
 
-def _cache_folder() -> Path:
-    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
+@functools.cache
+def cache_folder() -> Path:
+    """Folder that holds the on-disk cache of the package's compiled functions.
+
+    ``<base>/numba-<source hash>``; ``<base>`` is numba's ``CACHE_DIR`` setting (from
+    ``$NUMBA_CACHE_DIR``) if set, else ``$XDG_CACHE_HOME/pneumaquad`` or
+    ``~/.cache/pneumaquad``. Computed once per process; only read, never written to
+    numba's configuration.
+    """
+    base = numba.config.CACHE_DIR or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "pneumaquad"
     )
     return Path(base) / f"numba-{_source_hash()}"
 
 
-numba.config.CACHE_DIR = str(_cache_folder())
+class PackageCacheLocator(_SourceFileBackedLocatorMixin, _CacheLocator):
+    """numba cache locator that puts a function's cache files in :func:`cache_folder`.
 
-compiled = njit(cache=True, error_model="numpy")
+    Like numba's own locators it keeps one sub-folder per source folder and stamps each
+    entry with its source file's hash; the enclosing folder adds the whole package's hash.
+    """
+
+    def __init__(self, py_func: Callable[..., Any], py_file: str) -> None:
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        self._cache_path = str(cache_folder() / self.get_suitable_cache_subpath(py_file))
+
+    def get_cache_path(self) -> str:
+        """Folder of this function's index and data files."""
+        return self._cache_path
+
+
+class _PackageCacheImpl(CompileResultCacheImpl):
+    # only the package's locator: numba's in-tree or user-wide folders would not notice an
+    # edit of an inlined callee in another file
+    _locator_classes: ClassVar[list[type[_CacheLocator]]] = [PackageCacheLocator]
+
+
+class PackageFunctionCache(FunctionCache):
+    """numba's function cache with :class:`PackageCacheLocator` as its locator."""
+
+    _impl_class = _PackageCacheImpl
+
+
+def compiled(function: Callable[..., Any]) -> Callable[..., Any]:
+    """Compile ``function`` with ``njit(error_model="numpy")``, cached in :func:`cache_folder`.
+
+    The decorator of every compiled function of the package. Where the cache folder cannot
+    be created or written, the function is compiled afresh in each process instead.
+    """
+    dispatcher = njit(error_model="numpy")(function)
+    if isinstance(dispatcher, Dispatcher):  # a plain function under NUMBA_DISABLE_JIT
+        try:
+            cache = PackageFunctionCache(function)
+        except RuntimeError:  # "no locator available": the folder is not writable
+            return dispatcher
+        # what Dispatcher.enable_caching() does, with the package's cache class
+        dispatcher._cache = cache
+    return dispatcher
