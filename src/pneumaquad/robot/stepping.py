@@ -19,8 +19,8 @@ for it like for the rest of the package.
 from __future__ import annotations
 
 import ctypes
-import glob
-import os
+import platform
+from pathlib import Path
 from typing import NamedTuple
 
 import mujoco
@@ -47,6 +47,7 @@ __all__ = [
     "MJ_STEP1_ADDRESS",
     "MJ_STEP2_ADDRESS",
     "MJ_STEP_ADDRESS",
+    "MUJOCO_LIBRARY_NAMES",
     "STATUS_ACTUATOR",
     "STATUS_MUJOCO",
     "STATUS_OK",
@@ -57,7 +58,9 @@ __all__ = [
     "begin_step",
     "bring_to_present",
     "complete_step",
+    "mujoco_library_path",
     "mujoco_step_function",
+    "struct_address",
     "unstable_quantities",
 ]
 
@@ -84,14 +87,54 @@ def unstable_quantities(data: mujoco.MjData) -> str:
     return " and ".join(named) or "the state"
 
 
+#: File name of MuJoCo's shared library in its Python wheels, per ``platform.system()``
+#: (MuJoCo's own ``__init__`` loads ``mujoco.dll`` from the package folder on Windows).
+MUJOCO_LIBRARY_NAMES = {
+    "Linux": "libmujoco.so.{version}",
+    "Darwin": "libmujoco.{version}.dylib",
+    "Windows": "mujoco.dll",
+}
+
+
+def mujoco_library_path(system: str | None = None) -> Path:
+    """Path of the MuJoCo shared library that the ``mujoco`` bindings load.
+
+    The wheels place it beside the bindings in the ``mujoco`` package folder under the
+    name :data:`MUJOCO_LIBRARY_NAMES` gives for the platform and ``mujoco.__version__``
+    (other POSIX systems use the Linux name). The bindings expose no handle or path of
+    their own, and ``ctypes.util.find_library("mujoco")`` searches the system's folders,
+    where it finds nothing or another MuJoCo than the one the bindings use.
+    """
+    system = system or platform.system()
+    name = MUJOCO_LIBRARY_NAMES.get(system, MUJOCO_LIBRARY_NAMES["Linux"])
+    name = name.format(version=mujoco.__version__)
+    folders = [Path(folder) for folder in mujoco.__path__]
+    for folder in folders:
+        if (folder / name).is_file():
+            return folder / name
+    raise RuntimeError(f"MuJoCo's shared library {name} was not found in "
+                       f"{', '.join(map(str, folders))}")
+
+
 def _mujoco_library() -> ctypes.CDLL:
-    folder = os.path.dirname(mujoco.__file__)
-    candidates = sorted(glob.glob(os.path.join(folder, "libmujoco.so*"))) + sorted(
-        glob.glob(os.path.join(folder, "libmujoco*.dylib"))
-    )
-    if not candidates:
-        raise RuntimeError(f"MuJoCo's shared library was not found in {folder}")
-    return ctypes.CDLL(candidates[0])
+    # the bindings have loaded this file already: the loader hands back the same library
+    return ctypes.CDLL(str(mujoco_library_path()))
+
+
+def struct_address(struct: mujoco.MjModel | mujoco.MjData) -> int:
+    """Address of the ``mjModel``/``mjData`` that a bindings object wraps, for C calls.
+
+    MuJoCo 4 offers no public attribute for it: ``_address`` is the one the bindings
+    define for this (and MuJoCo's maintainers point users to it), so it is read here
+    and nowhere else; tests/robot/test_stepping.py fails with this message if it goes.
+    """
+    try:
+        return int(struct._address)
+    except AttributeError:
+        raise RuntimeError(
+            f"mujoco {mujoco.__version__} no longer exposes {type(struct).__name__}._address"
+            ", the raw struct pointer the compiled stepping loop passes to mj_step"
+        ) from None
 
 
 def _step_function(library: ctypes.CDLL, name: str):
