@@ -12,7 +12,10 @@ from pneumaquad.analysis.fits import (
     FIRST_ORDER,
     FIRST_PLUS_SECOND_ORDER,
     SECOND_ORDER,
+    START_TIME,
     FitError,
+    FitResult,
+    evaluate_step_fit,
     fit_first_order,
     fit_first_plus_second_order,
     fit_second_order,
@@ -40,11 +43,11 @@ def test_first_order_fit_recovers_parameters_from_noisy_pressure_step():
     rng = np.random.default_rng(11)
     measured = final - amplitude * np.exp(-ELAPSED / tau) + rng.normal(0, noise, TIME.size)
     fit = fit_first_order(TIME, measured)
-    assert fit.model == FIRST_ORDER
-    assert fit.start_time == STEP_AT
+    assert fit.name == FIRST_ORDER
+    assert fit.details[START_TIME] == STEP_AT
     assert fit.parameters["final value"] == pytest.approx(final, rel=0.002)
     assert fit.parameters["amplitude"] == pytest.approx(amplitude, rel=0.01)
-    assert fit.time_constant == pytest.approx(tau, rel=0.02)
+    assert fit.value("time constant") == pytest.approx(tau, rel=0.02)
     assert fit.r_squared > 0.99
     assert fit.residual_rms == pytest.approx(noise, rel=0.1)
     truth = {"final value": final, "amplitude": amplitude, "time constant [s]": tau}
@@ -52,7 +55,7 @@ def test_first_order_fit_recovers_parameters_from_noisy_pressure_step():
         error = fit.standard_errors[name]
         assert 0 < error < 0.01 * abs(value)
         assert abs(fit.parameters[name] - value) < 4 * error
-    curve = fit.evaluate(TIME)
+    curve = evaluate_step_fit(fit, TIME)
     assert np.sqrt(np.mean((curve - measured) ** 2)) == pytest.approx(fit.residual_rms)
 
 
@@ -63,9 +66,9 @@ def test_first_order_fit_of_a_falling_step_after_a_start_time():
     fit = fit_first_order(time, response, start_time=0.5)
     assert fit.parameters["final value"] == pytest.approx(1.0e5, rel=1e-6)
     assert fit.parameters["amplitude"] == pytest.approx(-3.0e5, rel=1e-6)
-    assert fit.time_constant == pytest.approx(tau, rel=1e-6)
+    assert fit.value("time constant") == pytest.approx(tau, rel=1e-6)
     assert fit.r_squared == pytest.approx(1.0, abs=1e-9)
-    assert fit.sample_count == 1500
+    assert fit.n_points == 1500
 
 
 def test_second_order_fit_recovers_damping_and_natural_frequency():
@@ -73,12 +76,13 @@ def test_second_order_fit_recovers_damping_and_natural_frequency():
     final, amplitude, damping, frequency = 0.03, 0.02, 0.3, 25.0  # m, m, -, rad/s
     response = final - amplitude * underdamped(ELAPSED, damping, frequency)
     fit = fit_second_order(TIME, response + rng.normal(0, 5e-5, TIME.size))
-    assert fit.model == SECOND_ORDER
+    assert fit.name == SECOND_ORDER
     assert fit.parameters["damping ratio [-]"] == pytest.approx(damping, rel=0.02)
     assert fit.parameters["natural frequency [rad/s]"] == pytest.approx(frequency, rel=0.01)
     assert fit.parameters["final value"] == pytest.approx(final, rel=0.002)
     assert fit.r_squared > 0.99
-    assert math.isnan(fit.time_constant)
+    assert "time constant [s]" not in fit.parameters
+    assert not fit.failed and fit.problems == ()
 
 
 def test_second_order_fit_of_an_overdamped_step():
@@ -99,8 +103,8 @@ def test_first_plus_second_order_fit_of_a_closed_loop_step():
         + rng.normal(0, 3e-5, TIME.size)
     )
     combined = fit_first_plus_second_order(TIME, response)
-    assert combined.model == FIRST_PLUS_SECOND_ORDER
-    assert combined.time_constant == pytest.approx(tau, rel=0.02)
+    assert combined.name == FIRST_PLUS_SECOND_ORDER
+    assert combined.value("time constant") == pytest.approx(tau, rel=0.02)
     assert combined.parameters["natural frequency [rad/s]"] == pytest.approx(frequency, rel=0.02)
     assert combined.parameters["damping ratio [-]"] == pytest.approx(damping, rel=0.05)
     assert combined.parameters["second-order amplitude"] == pytest.approx(0.004, rel=0.05)
@@ -131,3 +135,33 @@ def test_fit_result_is_immutable():
         fit.r_squared = 0.5
     with pytest.raises(TypeError):
         fit.parameters["time constant [s]"] = 1.0
+
+
+def test_every_fit_of_the_package_returns_the_one_result_type():
+    from pneumaquad.identification import (
+        fit_area_polynomials,
+        fit_coulomb_viscous,
+        fit_input_pressure_curve,
+    )
+    from pneumaquad.identification.friction import StictionEstimate, summarize_stiction
+
+    step = fit_first_order(TIME, 1.0 - np.exp(-ELAPSED / 0.1))
+    velocity = np.linspace(-0.2, 0.2, 41)
+    friction = fit_coulomb_viscous(velocity, 10.0 * np.sign(velocity) + 50.0 * velocity)
+    voltages = np.linspace(-2.0, 2.0, 21)
+    polynomials = fit_area_polynomials(voltages, {1: 1e-7 * (1.0 + voltages**2)})[1]
+    curve = fit_input_pressure_curve(
+        voltages, 1e5 + 5e5 * (1.0 + np.tanh(2.0 * voltages)) / 2.0, 6e5, 1e5, port=1
+    )
+    stiction = summarize_stiction(
+        [StictionEstimate(20.0, 1, 5.0, 5.01, 1e3, True, 6.0, 1e-3)]
+    )
+    for fit in (step, friction, polynomials.fit, curve, stiction):
+        assert type(fit) is FitResult
+        assert fit.rows() and fit.n_points > 0 and math.isfinite(fit.residual_rms)
+    # the polynomial fit's parameters are its coefficients, with finite standard errors
+    assert polynomials.fit.value("area_positive_c2") == pytest.approx(1e-7, rel=1e-6)
+    assert polynomials.fit.value("area_negative_c0") == pytest.approx(1e-7, rel=1e-6)
+    assert all(math.isfinite(error) for error in polynomials.fit.standard_errors.values())
+    assert polynomials.residual_rms == polynomials.fit.residual_rms
+    assert polynomials.fit.residual_unit == "m^2"

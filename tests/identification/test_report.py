@@ -6,8 +6,8 @@ import math
 
 import pytest
 
+from pneumaquad.analysis.fits import check_standard_errors, parameter_name_and_unit
 from pneumaquad.identification import FitResult, updates_from_fit, write_parameter_file
-from pneumaquad.identification.report import check_standard_errors, parameter_name_and_unit
 from pneumaquad.params import ParameterError, load_rig
 
 

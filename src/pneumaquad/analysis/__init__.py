@@ -1,5 +1,6 @@
 """Analysis of recordings: zero-phase filtering, error and step metrics, step fits,
-step-train segmentation and simulated-versus-measured comparison (thesis 4.2.1, 4.3).
+step-train segmentation and simulated-versus-measured comparison (thesis 4.2.1, 4.3), and
+the fit-result type (`FitResult`) every fit of the package returns.
 
 Pure functions over numpy arrays in SI units; recordings are dicts keyed
 ``"quantity [unit]"`` like those of the rig simulator.
@@ -26,7 +27,8 @@ from .fits import (
     FIRST_PLUS_SECOND_ORDER,
     SECOND_ORDER,
     FitError,
-    StepFit,
+    FitResult,
+    evaluate_step_fit,
     fit_first_order,
     fit_first_plus_second_order,
     fit_second_order,
@@ -52,8 +54,8 @@ __all__ = [
     "SECOND_ORDER",
     "AlignedRecordings",
     "FitError",
+    "FitResult",
     "SignalComparison",
-    "StepFit",
     "StepSegment",
     "align_recordings",
     "amplitude_spectrum",
@@ -62,6 +64,7 @@ __all__ = [
     "comparison_rows",
     "comparison_to_markdown",
     "design_lowpass",
+    "evaluate_step_fit",
     "find_steps",
     "fit_first_order",
     "fit_first_plus_second_order",

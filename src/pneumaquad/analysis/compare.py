@@ -335,7 +335,7 @@ def _time_constant(time: np.ndarray, values: np.ndarray, step_time: float | None
     if step_time is None:
         return math.nan
     try:
-        return fit_first_order(time, values, start_time=step_time).time_constant
+        return fit_first_order(time, values, start_time=step_time).value("time constant")
     except FitError:
         return math.nan
 

@@ -1,4 +1,13 @@
-"""Least-squares fits of step responses: first order, second order, and their sum.
+"""The one fit-result type of the package, and least-squares fits of step responses.
+
+`FitResult` holds what every fit of the package returns (the step fits here, the friction,
+input-pressure, equivalent-area and area-polynomial fits of `pneumaquad.identification`):
+the fitted values keyed ``"name [unit]"``, their standard errors, R², the residual RMS and
+its unit, the number of residuals, details, and the problems that make a fit untrustworthy
+(its success flag and messages). `covariance_from_jacobian`, `r_squared` and
+`check_standard_errors` are the statistics all of them share.
+
+The step fits: first order, second order, and their sum.
 
 The thesis compared simulated and measured open-loop cap-pressure steps through the time
 constant of a first-order fit, its eq (4.3.1) (transcript line 812), which reads with the
@@ -14,10 +23,13 @@ measured from the start of the fitted data (or from a given step instant).
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -26,14 +38,22 @@ from scipy.optimize import least_squares
 __all__ = [
     "FIRST_ORDER",
     "FIRST_PLUS_SECOND_ORDER",
+    "MAX_RELATIVE_STANDARD_ERROR",
     "SECOND_ORDER",
+    "START_TIME",
     "FitError",
-    "StepFit",
+    "FitResult",
+    "check_standard_errors",
+    "covariance_from_jacobian",
+    "evaluate_step_fit",
     "first_order_response",
     "fit_first_order",
     "fit_first_plus_second_order",
     "fit_second_order",
     "fit_step",
+    "format_r_squared",
+    "parameter_name_and_unit",
+    "r_squared",
     "second_order_response",
 ]
 
@@ -47,6 +67,160 @@ _CRITICAL_DAMPING_TOLERANCE = 1e-6
 
 class FitError(ValueError):
     """A step fit could not be made: unusable data or the optimiser did not converge."""
+
+
+#: Largest standard error, as a share of the value, of a parameter `check_standard_errors`
+#: accepts [-].
+MAX_RELATIVE_STANDARD_ERROR = 0.25
+_KEY_PATTERN = re.compile(r"^(?P<name>[^\[\]]+?)\s*\[(?P<unit>[^\[\]]+)\]$")
+
+
+@dataclass(frozen=True)
+class FitResult:
+    """Outcome of one least-squares fit: the result type of every fit of the package.
+
+    Attributes
+    ----------
+    name : str
+        What was fitted, e.g. ``"coulomb-viscous friction"`` or, for a step fit, its model
+        (`FIRST_ORDER`, `SECOND_ORDER`, `FIRST_PLUS_SECOND_ORDER`).
+    parameters : Mapping of str to float
+        Fitted values keyed ``"name [unit]"`` in SI, e.g. ``"coulomb_force [N]"``
+        (``"-"`` for pure numbers; a step fit's levels, ``"final value"`` and the
+        amplitudes, are in the unit of the fitted signal and carry no brackets).
+    standard_errors : Mapping of str to float
+        One-sigma standard errors, same keys; ``inf`` where not identifiable. They assume
+        independent residuals, so for time series they are lower bounds.
+    r_squared : float
+        Coefficient of determination 1 - SS_res/SS_tot [-] (NaN where undefined).
+    residual_rms : float
+        Root-mean-square residual, in ``residual_unit``.
+    n_points : int
+        Number of residuals fitted.
+    residual_unit : str
+        Unit of the residuals (``"N"``, ``"Pa"``, ...; empty: the fitted signal's unit).
+    details : Mapping of str to Any
+        Extra information (initial values, which parameters were held, a step fit's
+        ``"start time [s]"``, ...).
+    problems : tuple of str
+        Why the fit is not to be trusted, one sentence each naming the parameter (a
+        standard error that says the data do not determine it, a value at a bound, large
+        residuals); empty for a fit that passed its checks (see `failed`).
+    """
+
+    name: str
+    parameters: Mapping[str, float]
+    standard_errors: Mapping[str, float]
+    r_squared: float
+    residual_rms: float
+    n_points: int
+    residual_unit: str = ""
+    details: Mapping[str, Any] = field(default_factory=dict)
+    problems: tuple[str, ...] = ()
+
+    @property
+    def failed(self) -> bool:
+        """True when the fit's own checks say its values are not to be trusted."""
+        return bool(self.problems)
+
+    def value(self, name: str) -> float:
+        """Fitted value of a parameter by its name without the unit (``"coulomb_force"``).
+
+        Keys without a ``[unit]`` (a step fit's levels) are matched as they are.
+        """
+        for key, value in self.parameters.items():
+            match = _KEY_PATTERN.match(key.strip())
+            if (match["name"] if match else key) == name:
+                return value
+        raise KeyError(f"{name!r} is not a parameter of the {self.name} fit")
+
+    def rows(self) -> list[tuple[str, float, float]]:
+        """(key, value, standard error) per parameter, for tables."""
+        return [(key, value, self.standard_errors[key]) for key, value in self.parameters.items()]
+
+
+def check_standard_errors(
+    fit: FitResult, max_relative_error: float = MAX_RELATIVE_STANDARD_ERROR
+) -> FitResult:
+    """The fit with a problem added for each parameter the data do not determine.
+
+    A parameter fails when its standard error is not finite or exceeds
+    ``max_relative_error`` times its absolute value.
+
+    Parameters
+    ----------
+    fit : FitResult
+        Any fit.
+    max_relative_error : float
+        Largest acceptable standard error as a share of the value [-].
+
+    Returns
+    -------
+    FitResult
+        A copy with ``problems`` extended (the same object when nothing is added).
+    """
+    problems = []
+    for key, value, error in fit.rows():
+        if not (math.isfinite(error) and error <= max_relative_error * abs(value)):
+            problems.append(
+                f"{fit.name}: {key} = {value:.4g} has the standard error {error:.2g}, more "
+                f"than {max_relative_error:.0%} of its value: the data do not determine it"
+            )
+    if not problems:
+        return fit
+    return dataclasses.replace(fit, problems=(*fit.problems, *problems))
+
+
+def format_r_squared(value: float) -> str:
+    """R² with four decimals, or ``"n/a"`` where it is not defined (NaN)."""
+    return "n/a" if math.isnan(value) else f"{value:.4f}"
+
+
+def parameter_name_and_unit(key: str) -> tuple[str, str]:
+    """Split ``"coulomb_force [N]"`` into ``("coulomb_force", "N")``.
+
+    Raises
+    ------
+    ValueError
+        If the key has no ``[unit]`` suffix.
+    """
+    match = _KEY_PATTERN.match(key.strip())
+    if match is None:
+        raise ValueError(f"parameter key {key!r} should look like 'name [unit]'")
+    return match["name"], match["unit"].strip()
+
+
+def covariance_from_jacobian(jacobian: np.ndarray, residuals: np.ndarray) -> np.ndarray:
+    """Parameter covariance s²·(JᵀJ)⁻¹ of a least-squares fit, via the SVD.
+
+    Parameters
+    ----------
+    jacobian : numpy.ndarray
+        d(residual)/d(parameter) at the solution, shape (n_residuals, n_parameters).
+    residuals : numpy.ndarray
+        Residuals at the solution; s² = SS_res / (n_residuals - n_parameters).
+
+    Returns
+    -------
+    numpy.ndarray
+        Covariance (n_parameters, n_parameters); all ``inf`` if J is rank deficient.
+    """
+    jacobian = np.atleast_2d(np.asarray(jacobian, dtype=float))
+    count, unknowns = jacobian.shape
+    residual_variance = float(residuals @ residuals) / max(count - unknowns, 1)
+    _, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
+    threshold = np.finfo(float).eps * max(jacobian.shape) * (singular[0] if singular.size else 0)
+    if singular.size < unknowns or np.any(singular <= threshold):
+        return np.full((unknowns, unknowns), np.inf)
+    return (vt.T / singular**2) @ vt * residual_variance
+
+
+def r_squared(residuals: np.ndarray, observed: np.ndarray) -> float:
+    """1 - SS_res/SS_tot [-] (NaN when the observations are constant)."""
+    total = float(np.sum((observed - np.mean(observed)) ** 2))
+    if total == 0.0:
+        return math.nan
+    return 1.0 - float(residuals @ residuals) / total
 
 
 def first_order_response(
@@ -144,52 +318,29 @@ _MODELS: dict[str, tuple[Callable[..., np.ndarray], tuple[str, ...]]] = {
 }
 
 
-@dataclass(frozen=True)
-class StepFit:
-    """Result of a step fit.
+#: ``FitResult.details`` key of a step fit's t = 0 of the model [s]
+START_TIME = "start time [s]"
 
-    Attributes
+
+def evaluate_step_fit(fit: FitResult, time: ArrayLike) -> np.ndarray:
+    """A step fit's curve at absolute times ``time`` [s] (unit of the fitted signal).
+
+    Parameters
     ----------
-    model : str
-        `FIRST_ORDER`, `SECOND_ORDER` or `FIRST_PLUS_SECOND_ORDER`.
-    parameters : Mapping of str to float
-        Fitted parameters by name (names carry units; levels are in the signal's unit).
-    standard_errors : Mapping of str to float
-        One-sigma standard errors from the covariance estimate; infinite when the
-        parameters are not identifiable from the data.
-    r_squared : float
-        Coefficient of determination 1 - SS_res / SS_tot [-].
-    residual_rms : float
-        Root-mean-square residual (unit of the signal).
-    start_time : float
-        Instant taken as t = 0 of the model [s].
-    sample_count : int
-        Number of samples fitted.
+    fit : FitResult
+        From `fit_first_order`, `fit_second_order`, `fit_first_plus_second_order` or
+        `fit_step` (its ``name`` is the model, ``details["start time [s]"]`` its t = 0).
+    time : array_like
+        Absolute times [s].
     """
-
-    model: str
-    parameters: Mapping[str, float]
-    standard_errors: Mapping[str, float]
-    r_squared: float
-    residual_rms: float
-    start_time: float
-    sample_count: int = field(default=0)
-
-    @property
-    def time_constant(self) -> float:
-        """τ [s] of the first-order part (NaN for a pure second-order fit)."""
-        return float(self.parameters.get("time constant [s]", math.nan))
-
-    def evaluate(self, time: ArrayLike) -> np.ndarray:
-        """The fitted curve at absolute times ``time`` [s]."""
-        function, names = _MODELS[self.model]
-        elapsed = np.asarray(time, dtype=float) - self.start_time
-        return function(elapsed, *(self.parameters[name] for name in names))
+    function, names = _MODELS[fit.name]
+    elapsed = np.asarray(time, dtype=float) - fit.details[START_TIME]
+    return function(elapsed, *(fit.parameters[name] for name in names))
 
 
 def fit_first_order(
     time: ArrayLike, response: ArrayLike, start_time: float | None = None
-) -> StepFit:
+) -> FitResult:
     """Fit thesis eq (4.3.1), ``K0 - A0 · exp(-(t - t0)/τ)``, in the least-squares sense.
 
     Parameters
@@ -203,8 +354,10 @@ def fit_first_order(
 
     Returns
     -------
-    StepFit
-        Parameters ``"final value"`` (K0), ``"amplitude"`` (A0), ``"time constant [s]"``.
+    FitResult
+        Parameters ``"final value"`` (K0), ``"amplitude"`` (A0), ``"time constant [s]"``;
+        named after the model, ``details["start time [s]"]`` is the t0 used (evaluate the
+        curve with `evaluate_step_fit`); ``residual_unit`` empty: the signal's unit.
 
     Raises
     ------
@@ -218,12 +371,12 @@ def fit_first_order(
 
 def fit_second_order(
     time: ArrayLike, response: ArrayLike, start_time: float | None = None
-) -> StepFit:
+) -> FitResult:
     """Fit a damped second-order step response (`second_order_response`).
 
     Returns
     -------
-    StepFit
+    FitResult
         Parameters ``"final value"``, ``"amplitude"``, ``"natural frequency [rad/s]"``,
         ``"damping ratio [-]"`` (kept positive).
 
@@ -239,7 +392,7 @@ def fit_second_order(
 
 def fit_first_plus_second_order(
     time: ArrayLike, response: ArrayLike, start_time: float | None = None
-) -> StepFit:
+) -> FitResult:
     """Fit a first-order plus a second-order response, as for closed-loop steps (thesis l. 820).
 
     ``y = K - A1 · exp(-t/τ) - A2 · r2(t; ωn, ζ)`` where ``r2`` is one minus the unit step
@@ -248,7 +401,7 @@ def fit_first_plus_second_order(
 
     Returns
     -------
-    StepFit
+    FitResult
         Parameters ``"final value"``, ``"first-order amplitude"``, ``"time constant [s]"``,
         ``"second-order amplitude"``, ``"natural frequency [rad/s]"``,
         ``"damping ratio [-]"``.
@@ -261,7 +414,7 @@ def fit_first_plus_second_order(
     t, y, start = _prepare(time, response, start_time, 6)
     final, amplitude, tau = _first_order_guess(t, y)
     _, _, frequency, damping = _second_order_guess(t, y)
-    best: StepFit | None = None
+    best: FitResult | None = None
     last_error: FitError | None = None
     for share, frequency_factor in ((0.8, 1.0), (0.95, 3.0), (0.5, 1.0), (0.9, 10.0)):
         guess = [
@@ -289,7 +442,7 @@ def fit_step(
     response: ArrayLike,
     model: str = FIRST_ORDER,
     start_time: float | None = None,
-) -> StepFit:
+) -> FitResult:
     """Fit ``model`` (`FIRST_ORDER`, `SECOND_ORDER` or `FIRST_PLUS_SECOND_ORDER`)."""
     fitters = {
         FIRST_ORDER: fit_first_order,
@@ -359,7 +512,7 @@ def _fit(
     start: float,
     guess: list[float],
     positive: list[int],
-) -> StepFit:
+) -> FitResult:
     """Levenberg-Marquardt least squares; parameters listed in ``positive`` are fitted as
     logarithms, which keeps them positive without bounds."""
     function, names = _MODELS[model]
@@ -387,27 +540,15 @@ def _fit(
         raise FitError(f"{model} fit did not converge: {solution.message}")
     residual = solution.fun
     residual_sum = float(residual @ residual)
-    total_sum = float(np.sum((y - y.mean()) ** 2))
-    degrees_of_freedom = max(y.size - len(guess), 1)
-    errors = _standard_errors(solution.jac, residual_sum / degrees_of_freedom)
+    errors = np.sqrt(np.diag(covariance_from_jacobian(solution.jac, residual)))
     # d(parameter) = parameter * d(log parameter) for the log-fitted ones.
     errors = np.where(is_positive, errors * parameters, errors)
-    return StepFit(
-        model=model,
+    return FitResult(
+        name=model,
         parameters=MappingProxyType(dict(zip(names, map(float, parameters), strict=True))),
         standard_errors=MappingProxyType(dict(zip(names, map(float, errors), strict=True))),
-        r_squared=1.0 - residual_sum / total_sum,
+        r_squared=r_squared(residual, y),
         residual_rms=math.sqrt(residual_sum / y.size),
-        start_time=start,
-        sample_count=int(y.size),
+        n_points=int(y.size),
+        details=MappingProxyType({START_TIME: start}),
     )
-
-
-def _standard_errors(jacobian: np.ndarray, residual_variance: float) -> np.ndarray:
-    """sqrt(diag(s² (JᵀJ)⁻¹)) via the SVD; infinite for unidentifiable directions."""
-    _, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
-    threshold = np.finfo(float).eps * max(jacobian.shape) * singular[0]
-    if np.any(singular <= threshold):
-        return np.full(jacobian.shape[1], np.inf)
-    covariance = (vt.T / singular**2) @ vt * residual_variance
-    return np.sqrt(np.diag(covariance))

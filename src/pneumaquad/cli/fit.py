@@ -23,6 +23,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 from rich.table import Table
 
 from pneumaquad.analysis import find_steps
+from pneumaquad.analysis.fits import FitResult, check_standard_errors, format_r_squared
 from pneumaquad.cli.common import ParamsOption, SetOption, console
 from pneumaquad.identification.equivalent_area import AREA_MODES, START_TEMPERATURE_SOURCES
 from pneumaquad.identification.friction import (
@@ -33,13 +34,7 @@ from pneumaquad.identification.friction import (
     summarize_stiction,
 )
 from pneumaquad.identification.preprocess import IdentificationError
-from pneumaquad.identification.report import (
-    FitResult,
-    check_standard_errors,
-    format_r_squared,
-    updates_from_fit,
-    write_parameter_file,
-)
+from pneumaquad.identification.report import updates_from_fit, write_parameter_file
 from pneumaquad.identification.valve import (
     area_polynomial_updates,
     areas_table,

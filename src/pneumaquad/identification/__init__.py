@@ -5,7 +5,12 @@ the underlapped valve's input-pressure curves from fixed-piston tests, equivalen
 areas fitted around the rig simulator and their polynomials, and parameter files written
 from the results. Pure functions over recordings (dicts of SI arrays keyed
 ``"quantity [unit]"``, simulated or from `pneumaquad.io.measured`).
+
+Every fit returns the package's one result type, `pneumaquad.analysis.fits.FitResult`
+(re-exported here with `check_standard_errors`).
 """
+
+from pneumaquad.analysis.fits import FitResult, check_standard_errors
 
 from .friction import (
     STRIBECK_TANH_PARAMETERS,
@@ -25,7 +30,7 @@ from .preprocess import (
     prepare_signals,
     select_step,
 )
-from .report import FitResult, check_standard_errors, updates_from_fit, write_parameter_file
+from .report import updates_from_fit, write_parameter_file
 from .valve import (
     AreaPolynomials,
     EquivalentAreaFit,

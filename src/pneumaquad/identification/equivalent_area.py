@@ -28,6 +28,7 @@ from scipy.optimize import least_squares
 
 from pneumaquad.analysis import find_steps
 from pneumaquad.analysis.filters import sample_rate_of
+from pneumaquad.analysis.fits import FitResult, covariance_from_jacobian, r_squared
 from pneumaquad.core import layout
 from pneumaquad.core.actuator import supply_state
 from pneumaquad.core.control.pid import new_pid_state
@@ -39,7 +40,6 @@ from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_
 from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk
 
 from .preprocess import REQUIRED_COLUMNS, IdentificationError, select_step
-from .report import FitResult, covariance_from_jacobian, r_squared
 
 __all__ = [
     "AREA_MODES",

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import find_peaks
 
+from pneumaquad.analysis.fits import FitResult
 from pneumaquad.params.schema import RigSetup
 
 from .friction_fits import (
@@ -31,7 +32,6 @@ from .friction_fits import (
     stribeck_tanh_curve,
 )
 from .preprocess import FilterSettings, IdentificationError, prepare_signals, select_step
-from .report import FitResult
 
 __all__ = [
     "STRIBECK_TANH_PARAMETERS",

@@ -16,11 +16,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import least_squares
 
+from pneumaquad.analysis.fits import FitResult, covariance_from_jacobian, r_squared
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.physics.friction import stribeck_tanh_force
 
 from .preprocess import IdentificationError
-from .report import FitResult, covariance_from_jacobian, r_squared
 
 __all__ = [
     "STRIBECK_TANH_PARAMETERS",

@@ -20,11 +20,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.optimize import least_squares
 
+from pneumaquad.analysis.fits import FitResult, covariance_from_jacobian, r_squared
 from pneumaquad.core.valve_fit import input_pressure
 from pneumaquad.params.schema import RigSetup
 
 from .preprocess import IdentificationError
-from .report import FitResult, covariance_from_jacobian, r_squared
 
 __all__ = [
     "InputPressureCurves",

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from pneumaquad.analysis.fits import FitResult, covariance_from_jacobian, r_squared
 from pneumaquad.core.valve_fit import evaluate_equivalent_area, fit_equivalent_area_polynomials
 
 from .equivalent_area import (
@@ -73,16 +74,38 @@ class AreaPolynomials:
     negative, positive : numpy.ndarray
         5 coefficients each, highest power first [m^2/V^n], for centered voltages
         <= 0 and > 0.
-    residual_rms : float
-        RMS of the fit residuals [m^2].
-    n_points : int
-        Points fitted.
+    fit : FitResult
+        The same coefficients keyed ``"area_negative_c4 [m^2/V^4]"`` ...
+        ``"area_positive_c0 [m^2]"`` with the standard errors of each side's least
+        squares, R² and the RMS residual of the two-sided curve over all points [m^2].
     """
 
     negative: np.ndarray
     positive: np.ndarray
-    residual_rms: float
-    n_points: int
+    fit: FitResult
+
+    @property
+    def residual_rms(self) -> float:
+        """RMS of the fit residuals [m^2]."""
+        return self.fit.residual_rms
+
+    @property
+    def n_points(self) -> int:
+        """Points fitted."""
+        return self.fit.n_points
+
+
+def _coefficient_keys(side: str, order: int) -> list[str]:
+    """``"area_<side>_c<k> [m^2/V^k]"``, highest power first (``np.polyval`` order)."""
+    return [f"area_{side}_c{k} [m^2/V^{k}]" if k else f"area_{side}_c0 [m^2]"
+            for k in range(order, -1, -1)]
+
+
+def _side_errors(coefficients: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """One-sigma standard errors of one side's ordinary least-squares coefficients."""
+    design = np.vander(x, coefficients.size)  # d(residual)/d(coefficient)
+    residuals = np.polyval(coefficients, x) - y
+    return np.sqrt(np.diag(covariance_from_jacobian(design, residuals)))
 
 
 def fit_area_polynomials(
@@ -120,11 +143,23 @@ def fit_area_polynomials(
         except ValueError as error:
             raise IdentificationError(f"port {port}: {error}") from error
         fitted = evaluate_equivalent_area(negative, positive, x)
+        keys = [*_coefficient_keys("negative", order), *_coefficient_keys("positive", order)]
+        errors = np.concatenate([_side_errors(negative, x[x <= 0.0], y[x <= 0.0]),
+                                 _side_errors(positive, x[x >= 0.0], y[x >= 0.0])])
+        values_fitted = np.concatenate([negative, positive])
         result[port] = AreaPolynomials(
             negative=negative,
             positive=positive,
-            residual_rms=float(np.sqrt(np.mean((fitted - y) ** 2))),
-            n_points=int(y.size),
+            fit=FitResult(
+                name=f"area polynomials, port {port}",
+                parameters=dict(zip(keys, map(float, values_fitted), strict=True)),
+                standard_errors=dict(zip(keys, map(float, errors), strict=True)),
+                r_squared=r_squared(fitted - y, y),
+                residual_rms=float(np.sqrt(np.mean((fitted - y) ** 2))),
+                n_points=int(y.size),
+                residual_unit="m^2",
+                details={"port": port, "order": order},
+            ),
         )
     return result
 
