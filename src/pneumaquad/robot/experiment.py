@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 
-from pneumaquad.core.layout import P_R, P_TS
 from pneumaquad.io.interruption import deferred_interrupt
 from pneumaquad.io.recording import RunRecorder, write_summary
 from pneumaquad.params import resolved_parameters_toml
@@ -98,11 +97,11 @@ def tank_endurance(simulation: RobotSimulation, mean_flow: float) -> float:
     supply = simulation.robot.actuators["alpha"].supply
     if supply.tank_volume is None or supply.tank_initial_pressure is None or mean_flow <= 0:
         return math.nan
-    temperature = supply.tank_temperature or float(simulation.params[0, P_TS])
+    temperature = supply.tank_temperature or float(simulation.params[0]["supply_temperature"])
     usable = (
         supply.tank_volume
         * (supply.tank_initial_pressure - supply.supply_pressure)
-        / (simulation.params[0, P_R] * temperature)
+        / (simulation.params[0]["gas_constant"] * temperature)
     )
     return usable / mean_flow
 
@@ -243,7 +242,7 @@ def _summary(
     per_joint = simulation.air_consumed_per_joint()
     mean_flow = air / simulated if simulated > 0 else math.nan
     normal_litres_per_kg = (
-        simulation.params[0, P_R] * 273.15 / 101325.0 * 1000.0
+        simulation.params[0]["gas_constant"] * 273.15 / 101325.0 * 1000.0
     )
     summary: dict[str, Any] = {
         "description": description,
