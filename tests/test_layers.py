@@ -18,6 +18,7 @@ RANK = {
     "console": 9,
     "demo": 9,
     "network": 8,
+    "interop": 8,
     "locomotion": 7,
     "robot": 6,
     "reporting": 5,
