@@ -1,13 +1,17 @@
-"""Tests of the leg kinematics: DH extraction, FK (screw vs DH), Jacobian, IK.
+"""Tests of the leg kinematics: DH extraction, FK (DH vs MuJoCo), Jacobian, IK.
 
 The real leg is rebuilt here from the SrLib link frames of thesis App. C.2.1 (Leg.cpp), so the
-DH table is checked against thesis Table 1 by derivation, not by typed-in numbers.
+DH table is checked against thesis Table 1 by derivation, not by typed-in numbers. The
+package's one forward kinematics (the compiled DH chain) is checked against MuJoCo's own
+kinematics of the same geometry: three hinges and a foot site in a small MJCF model.
 """
 
 from __future__ import annotations
 
 import re
+from functools import cache
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -20,7 +24,6 @@ from pneumaquad.robot.kinematics import (
     foot_jacobian,
     format_dh_table,
     forward_kinematics_dh,
-    forward_kinematics_screw,
 )
 from pneumaquad.robot.leg_ik import UnreachableTargetError, inverse_kinematics
 
@@ -65,6 +68,45 @@ def real_leg_geometry(lower_deg=LIMITS_DEG[:, 0], upper_deg=LIMITS_DEG[:, 1]) ->
     frames = np.stack([np.eye(4), beta_joint, gamma_joint])  # joints turn about their z
     return LegGeometry(frames[:, :3, 3], frames[:, :3, 2], foot[:3], np.radians(lower_deg),
                        np.radians(upper_deg))
+
+
+def _vector(values) -> str:
+    return " ".join(repr(float(value)) for value in values)
+
+
+@cache
+def _mujoco_chain(geometry: LegGeometry) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """The leg as a MuJoCo chain: hinges at the geometry's joint points and axes, a foot site.
+
+    Every body sits at the origin without rotation, so positions given in a body are in the
+    geometry frame at zero angles; MuJoCo then does its own forward kinematics."""
+    hinges = [f'<body><joint type="hinge" limited="false" pos="{_vector(point)}" '
+              f'axis="{_vector(axis)}"/><geom type="sphere" size="0.01"/>'
+              for point, axis in zip(geometry.joint_points, geometry.joint_axes, strict=True)]
+    xml = (f"<mujoco><worldbody>{''.join(hinges)}<site name=\"foot\" "
+           f"pos=\"{_vector(geometry.foot_point)}\"/>{'</body>' * 3}</worldbody></mujoco>")
+    model = mujoco.MjModel.from_xml_string(xml)
+    return model, mujoco.MjData(model)
+
+
+def mujoco_feet(geometry: LegGeometry, angles) -> np.ndarray:
+    """Foot position(s) (..., 3) [m] that MuJoCo computes for joint angles (..., 3) [rad]."""
+    model, data = _mujoco_chain(geometry)
+    angles = np.asarray(angles, dtype=float)
+    feet = np.empty(angles.shape)
+    for index in np.ndindex(angles.shape[:-1]):
+        data.qpos[:] = angles[index]
+        mujoco.mj_kinematics(model, data)
+        feet[index] = data.site_xpos[0]
+    return feet
+
+
+def mujoco_joint_axes(geometry: LegGeometry, angles) -> tuple[np.ndarray, np.ndarray]:
+    """MuJoCo's joint anchors and axes (3, 3) [m], [-] for one set of angles [rad]."""
+    model, data = _mujoco_chain(geometry)
+    data.qpos[:] = angles
+    mujoco.mj_kinematics(model, data)
+    return data.xanchor.copy(), data.xaxis.copy()
 
 
 GEOMETRY = real_leg_geometry()
@@ -122,14 +164,21 @@ def test_real_leg_dh_table_matches_thesis_table_1():
     assert "alpha [deg]" in format_dh_table(TABLE)
 
 
-def test_dh_and_screw_forward_kinematics_agree_on_the_real_leg():
+def test_dh_forward_kinematics_matches_mujoco_on_the_real_leg():
     angles = _random_angles(np.random.default_rng(1), 500)
-    difference = forward_kinematics_dh(TABLE, angles) - forward_kinematics_screw(GEOMETRY, angles)
+    difference = forward_kinematics_dh(TABLE, angles) - mujoco_feet(GEOMETRY, angles)
     assert np.max(np.abs(difference)) < 1e-12
     single = angles[0]
     assert forward_kinematics_dh(TABLE, single).shape == (3,)
-    assert np.allclose(dh_frames(TABLE, angles)[7, 3] @ TABLE.tool[:, 3],
-                       np.append(forward_kinematics_screw(GEOMETRY, angles[7]), 1.0), atol=1e-12)
+    frames = dh_frames(TABLE, angles)
+    assert np.allclose(frames[7, 3] @ TABLE.tool[:, 3],
+                       np.append(mujoco_feet(GEOMETRY, angles[7]), 1.0), atol=1e-12)
+    # frame i-1 turns about joint i: its z axis is MuJoCo's joint axis, its origin on it
+    anchors, axes = mujoco_joint_axes(GEOMETRY, angles[7])
+    for joint in range(3):
+        z_axis, origin = frames[7, joint, :3, 2], frames[7, joint, :3, 3]
+        assert np.allclose(z_axis, axes[joint], atol=1e-12)
+        assert np.linalg.norm(np.cross(origin - anchors[joint], z_axis)) < 1e-12
 
 
 @pytest.mark.parametrize("seed", range(25))
@@ -141,17 +190,17 @@ def test_rederived_table_of_a_synthetic_chain_gives_the_same_kinematics(seed):
     angles = generator.uniform(-np.pi, np.pi, size=(50, 3))
     expected = forward_kinematics_dh(table, angles)
     assert np.max(np.abs(forward_kinematics_dh(derived, angles) - expected)) < 1e-12
-    assert np.max(np.abs(forward_kinematics_screw(geometry, angles) - expected)) < 1e-12
+    assert np.max(np.abs(mujoco_feet(geometry, angles) - expected)) < 1e-12
     assert np.allclose(derived.tool[:3, :3], np.eye(3)) and np.allclose(derived.tool[:2, 3], 0)
 
 
 def test_inverse_kinematics_round_trip_on_the_real_leg():
     for angles in _random_angles(np.random.default_rng(2), 200):
-        target = forward_kinematics_screw(GEOMETRY, angles)
+        target = mujoco_feet(GEOMETRY, angles)
         result = inverse_kinematics(GEOMETRY, target)
         assert result.reachable
         assert result.error < 1e-9
-        assert np.linalg.norm(forward_kinematics_screw(GEOMETRY, result.angles) - target) < 1e-9
+        assert np.linalg.norm(mujoco_feet(GEOMETRY, result.angles) - target) < 1e-9
         assert np.all(result.angles >= GEOMETRY.lower_limits)
         assert np.all(result.angles <= GEOMETRY.upper_limits)
         assert np.allclose(result.angles, angles, atol=1e-7)  # unique in-limit solution
@@ -177,8 +226,8 @@ def test_branch_selection_follows_the_current_angles():
     planar = np.arctan2(a2 * np.sin(angles[1]) + a3 * np.sin(angles[1] + angles[2]),
                         a2 * np.cos(angles[1]) + a3 * np.cos(angles[1] + angles[2]))
     flipped = np.array([angles[0], 2 * planar - angles[1], -angles[2]])  # other elbow branch
-    target = forward_kinematics_screw(wide, angles)
-    assert np.linalg.norm(forward_kinematics_screw(wide, flipped) - target) < 1e-12
+    target = mujoco_feet(wide, angles)
+    assert np.linalg.norm(mujoco_feet(wide, flipped) - target) < 1e-12
     for branch in (angles, flipped):
         result = inverse_kinematics(wide, target, current_angles=branch + 0.05)
         assert np.allclose(result.angles, branch, atol=1e-9)
@@ -208,7 +257,7 @@ def test_far_target_is_outside_the_workspace():
      ((10.0, 20.0, 40.0), "beta", "upper limit -1.0 deg")],
 )
 def test_target_blocked_by_a_joint_limit_names_the_limit(angles_deg, joint, words):
-    target = forward_kinematics_screw(GEOMETRY, np.radians(angles_deg))
+    target = mujoco_feet(GEOMETRY, np.radians(angles_deg))
     assert np.linalg.norm(target) < np.sum(TABLE.a)  # inside the reach sphere
     with pytest.raises(UnreachableTargetError) as caught:
         inverse_kinematics(GEOMETRY, target)
@@ -220,8 +269,8 @@ def test_target_blocked_by_a_joint_limit_names_the_limit(angles_deg, joint, word
 
 @pytest.mark.parametrize(
     "target",
-    [forward_kinematics_screw(GEOMETRY, np.radians([120.0, -30.0, 50.0])),
-     forward_kinematics_screw(GEOMETRY, np.radians([0.0, -30.0, 5.0])),
+    [mujoco_feet(GEOMETRY, np.radians([120.0, -30.0, 50.0])),
+     mujoco_feet(GEOMETRY, np.radians([0.0, -30.0, 5.0])),
      np.array([0.05, 0.02, -0.1]), np.array([2.0, -1.0, 0.5])],
 )
 def test_clamped_solution_is_in_limits_and_no_worse_than_sampled_configurations(target):
@@ -231,7 +280,7 @@ def test_clamped_solution_is_in_limits_and_no_worse_than_sampled_configurations(
     assert np.all(result.angles <= GEOMETRY.upper_limits)
     assert result.error == pytest.approx(np.linalg.norm(result.foot - target), abs=1e-15)
     samples = _random_angles(np.random.default_rng(3), 2000)
-    sampled = np.linalg.norm(forward_kinematics_screw(GEOMETRY, samples) - target, axis=-1)
+    sampled = np.linalg.norm(mujoco_feet(GEOMETRY, samples) - target, axis=-1)
     assert result.error <= sampled.min() + 1e-12
 
 
@@ -243,24 +292,27 @@ def test_jacobian_matches_finite_differences(model):
     for joint in range(3):
         shift = np.zeros(3)
         shift[joint] = step
-        column = (forward_kinematics_screw(GEOMETRY, angles + shift)
-                  - forward_kinematics_screw(GEOMETRY, angles - shift)) / (2 * step)
+        column = (mujoco_feet(GEOMETRY, angles + shift)
+                  - mujoco_feet(GEOMETRY, angles - shift)) / (2 * step)
         assert np.max(np.abs(jacobian[..., joint] - column)) < 1e-6
     assert foot_jacobian(model, angles[0]).shape == (3, 3)
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_single_leg_compiled_chain_equals_the_batched_kinematics(seed):
-    # one set of angles takes the compiled path, a batch the NumPy one: the same numbers
+def test_single_leg_and_batched_kinematics_are_the_same_chain(seed):
+    # one compiled DH chain serves one set of angles, a batch of any shape and the frames
     generator = np.random.default_rng(200 + seed)
     table = _random_table(generator, table1_structure=seed % 2 == 0)
-    angles = generator.uniform(-np.pi, np.pi, size=(20, 3))
+    angles = generator.uniform(-np.pi, np.pi, size=(4, 5, 3))
     batch_feet = forward_kinematics_dh(table, angles)
     batch_jacobians = foot_jacobian(table, angles)
-    for k in range(len(angles)):
-        assert forward_kinematics_dh(table, angles[k]) == pytest.approx(batch_feet[k],
-                                                                         abs=1e-14)
-        assert foot_jacobian(table, angles[k]) == pytest.approx(batch_jacobians[k], abs=1e-14)
+    frames = dh_frames(table, angles)
+    assert batch_feet.shape == (4, 5, 3) and batch_jacobians.shape == (4, 5, 3, 3)
+    for k in np.ndindex(4, 5):
+        np.testing.assert_array_equal(forward_kinematics_dh(table, angles[k]), batch_feet[k])
+        np.testing.assert_array_equal(foot_jacobian(table, angles[k]), batch_jacobians[k])
+        np.testing.assert_array_equal(dh_frames(table, angles[k]), frames[k])
+        assert np.allclose((frames[k][3] @ table.tool[:, 3])[:3], batch_feet[k], atol=1e-15)
 
 
 def test_invalid_geometry_is_rejected_with_clear_messages():

@@ -2,9 +2,10 @@
 
 Three revolute joints in series (thesis section 3.1, Table 1); beta and gamma are parallel.
 The zero pose is geometry (a point and unit axis per joint, the foot point, in one fixed
-"shoulder" frame) taken from the model's link frames; the DH table is derived from it. Two
-independent forward kinematics: product of exponentials over the joint screws, and the DH
-chain. The inverse kinematics is in :mod:`.leg_ik`.
+"shoulder" frame) taken from the model's link frames; the DH table is derived from it. The
+forward kinematics and the Jacobian have one implementation, the compiled DH chain
+(:func:`_leg_frames`), for one set of angles or a batch; the tests check it against
+MuJoCo's own body and site positions. The inverse kinematics is in :mod:`.leg_ik`.
 
 Conventions: SI and radians; a positive angle turns right-handed about the joint axis;
 standard DH ``A_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i)`` with ``θ_i = q_i + theta_offset_i``.
@@ -86,36 +87,6 @@ class LegGeometry:
         lower, upper = _checked_limits(self.lower_limits, self.upper_limits)
         set_field(self, "lower_limits", lower)
         set_field(self, "upper_limits", upper)
-
-
-def _rotate(vectors: Array, axis: Array, angles: Array) -> Array:
-    """Rodrigues rotation of ``vectors (..., 3)`` by ``angles (...)`` about a unit ``axis``."""
-    cosine = np.cos(angles)[..., None]
-    sine = np.sin(angles)[..., None]
-    along = np.sum(vectors * axis, axis=-1, keepdims=True) * axis
-    return vectors * cosine + np.cross(axis, vectors) * sine + along * (1.0 - cosine)
-
-
-def forward_kinematics_screw(geometry: LegGeometry, angles: ArrayLike) -> Array:
-    """Foot position by the product of exponentials of the joint screws (Rodrigues).
-
-    Parameters
-    ----------
-    geometry : LegGeometry
-    angles : array_like, shape (..., 3)
-        Joint angles alpha, beta, gamma [rad].
-
-    Returns
-    -------
-    ndarray, shape (..., 3)
-        Foot position in the geometry frame [m].
-    """
-    angles = np.asarray(angles, dtype=float)
-    position = np.broadcast_to(geometry.foot_point, angles.shape).copy()
-    for joint in (2, 1, 0):  # distal joint first: exp(S1 q1) exp(S2 q2) exp(S3 q3) foot
-        point = geometry.joint_points[joint]
-        position = point + _rotate(position - point, geometry.joint_axes[joint], angles[..., joint])
-    return position
 
 
 @dataclass(frozen=True, eq=False)
@@ -255,17 +226,81 @@ def dh_from_geometry(geometry: LegGeometry) -> DHTable:
                    geometry.lower_limits, geometry.upper_limits)
 
 
-def _dh_link_transforms(table: DHTable, angles: Array) -> Array:
-    """``A_i`` for each joint, shape (..., 3, 4, 4)."""
-    theta = angles + table.theta_offset
-    cos_t, sin_t = np.cos(theta), np.sin(theta)
-    cos_a, sin_a = np.broadcast_to(np.cos(table.alpha), theta.shape), np.sin(table.alpha)
-    links = np.zeros((*theta.shape, 4, 4))
-    links[..., 0, :] = np.stack([cos_t, -sin_t * cos_a, sin_t * sin_a, table.a * cos_t], -1)
-    links[..., 1, :] = np.stack([sin_t, cos_t * cos_a, -cos_t * sin_a, table.a * sin_t], -1)
-    links[..., 2, 1], links[..., 2, 2], links[..., 2, 3] = sin_a, cos_a, table.d
-    links[..., 3, 3] = 1.0
-    return links
+@compiled
+def _leg_frames(theta_offset, d, alpha, a, base, angles, frames):
+    """Poses of DH frames 0..3 of one leg, ``base · A1 · A2 · A3``, written into ``frames``
+    (4, 4, 4) for one set of ``angles`` (3,) [rad] (compiled: the package's one DH chain)."""
+    frames[0, :, :] = base
+    link = np.zeros((4, 4))
+    for i in range(3):
+        theta = angles[i] + theta_offset[i]
+        cos_t, sin_t = math.cos(theta), math.sin(theta)
+        cos_a, sin_a = math.cos(alpha[i]), math.sin(alpha[i])
+        link[0, 0], link[0, 1], link[0, 2] = cos_t, -sin_t * cos_a, sin_t * sin_a
+        link[1, 0], link[1, 1], link[1, 2] = sin_t, cos_t * cos_a, -cos_t * sin_a
+        link[2, 1], link[2, 2] = sin_a, cos_a
+        link[0, 3], link[1, 3], link[2, 3], link[3, 3] = a[i] * cos_t, a[i] * sin_t, d[i], 1.0
+        for r in range(4):
+            for c in range(4):
+                total = 0.0
+                for k in range(4):
+                    total += frames[i, r, k] * link[k, c]
+                frames[i + 1, r, c] = total
+
+
+@compiled
+def _leg_chain(theta_offset, d, alpha, a, base, tool, angles, foot, jacobian):
+    """Foot position (3,) [m] and Jacobian (3, 3) [m/rad] of one leg for one set of
+    ``angles`` (3,) [rad], written into ``foot`` and ``jacobian`` (compiled). Column i of
+    the Jacobian is ``z_(i-1) × (foot - o_(i-1))`` from the DH frames."""
+    frames = np.empty((4, 4, 4))
+    _leg_frames(theta_offset, d, alpha, a, base, angles, frames)
+    for r in range(3):
+        foot[r] = (frames[3, r, 0] * tool[0, 3] + frames[3, r, 1] * tool[1, 3]
+                   + frames[3, r, 2] * tool[2, 3] + frames[3, r, 3] * tool[3, 3])
+    for i in range(3):
+        rx = foot[0] - frames[i, 0, 3]
+        ry = foot[1] - frames[i, 1, 3]
+        rz = foot[2] - frames[i, 2, 3]
+        jacobian[0, i] = frames[i, 1, 2] * rz - frames[i, 2, 2] * ry
+        jacobian[1, i] = frames[i, 2, 2] * rx - frames[i, 0, 2] * rz
+        jacobian[2, i] = frames[i, 0, 2] * ry - frames[i, 1, 2] * rx
+
+
+@compiled
+def _leg_chain_batch(theta_offset, d, alpha, a, base, tool, angles, feet, jacobians):
+    """:func:`_leg_chain` for each row of ``angles`` (n, 3) [rad] (compiled loop)."""
+    for n in range(angles.shape[0]):
+        _leg_chain(theta_offset, d, alpha, a, base, tool, angles[n], feet[n], jacobians[n])
+
+
+@compiled
+def _leg_frames_batch(theta_offset, d, alpha, a, base, angles, frames):
+    """:func:`_leg_frames` for each row of ``angles`` (n, 3) [rad] (compiled loop)."""
+    for n in range(angles.shape[0]):
+        _leg_frames(theta_offset, d, alpha, a, base, angles[n], frames[n])
+
+
+def _rows(angles: ArrayLike) -> tuple[Array, tuple[int, ...]]:
+    """Angles as contiguous rows (n, 3) [rad] and the batch shape to restore."""
+    array = np.asarray(angles, dtype=float)
+    if array.shape[-1:] != (3,):
+        raise ValueError(f"angles must have shape (..., 3), got {array.shape}")
+    return np.ascontiguousarray(array.reshape(-1, 3)), array.shape[:-1]
+
+
+def _chain(table: DHTable, angles: ArrayLike) -> tuple[Array, Array]:
+    """Foot positions (..., 3) [m] and Jacobians (..., 3, 3) [m/rad] for ``angles``."""
+    rows, shape = _rows(angles)
+    feet = np.empty((len(rows), 3))
+    jacobians = np.empty((len(rows), 3, 3))
+    if len(rows) == 1:  # one leg at a time is the common case: no batch loop
+        _leg_chain(table.theta_offset, table.d, table.alpha, table.a, table.base, table.tool,
+                   rows[0], feet[0], jacobians[0])
+    else:
+        _leg_chain_batch(table.theta_offset, table.d, table.alpha, table.a, table.base,
+                         table.tool, rows, feet, jacobians)
+    return feet.reshape(*shape, 3), jacobians.reshape(*shape, 3, 3)
 
 
 def dh_frames(table: DHTable, angles: ArrayLike) -> Array:
@@ -282,63 +317,11 @@ def dh_frames(table: DHTable, angles: ArrayLike) -> Array:
     ndarray, shape (..., 4, 4, 4)
         Homogeneous transforms, frame index on axis -3 [m].
     """
-    angles = np.asarray(angles, dtype=float)
-    links = _dh_link_transforms(table, angles)
-    frames = np.empty((*angles.shape[:-1], 4, 4, 4))
-    frames[..., 0, :, :] = table.base
-    for i in range(3):
-        frames[..., i + 1, :, :] = frames[..., i, :, :] @ links[..., i, :, :]
-    return frames
-
-
-@compiled
-def _single_leg_chain(theta_offset, d, alpha, a, base, tool, angles, jacobian):
-    """Foot position (3,) [m] of one leg for one set of ``angles`` (3,) [rad] through the
-    DH chain, and its Jacobian written into ``jacobian`` (3, 3) [m/rad] (compiled; the
-    same formulas as :func:`dh_frames` and :func:`foot_jacobian` without their batching,
-    which costs a hundred times more than the arithmetic for a single leg)."""
-    frame = base.copy()
-    product = np.empty((4, 4))
-    link = np.zeros((4, 4))
-    axes = np.empty((3, 3))
-    points = np.empty((3, 3))
-    for i in range(3):
-        for r in range(3):
-            axes[i, r] = frame[r, 2]
-            points[i, r] = frame[r, 3]
-        theta = angles[i] + theta_offset[i]
-        cos_t, sin_t = math.cos(theta), math.sin(theta)
-        cos_a, sin_a = math.cos(alpha[i]), math.sin(alpha[i])
-        link[0, 0], link[0, 1], link[0, 2] = cos_t, -sin_t * cos_a, sin_t * sin_a
-        link[1, 0], link[1, 1], link[1, 2] = sin_t, cos_t * cos_a, -cos_t * sin_a
-        link[2, 1], link[2, 2] = sin_a, cos_a
-        link[0, 3], link[1, 3], link[2, 3], link[3, 3] = a[i] * cos_t, a[i] * sin_t, d[i], 1.0
-        for r in range(4):
-            for c in range(4):
-                total = 0.0
-                for k in range(4):
-                    total += frame[r, k] * link[k, c]
-                product[r, c] = total
-        frame[:, :] = product
-    foot = np.empty(3)
-    for r in range(3):
-        foot[r] = (frame[r, 0] * tool[0, 3] + frame[r, 1] * tool[1, 3]
-                   + frame[r, 2] * tool[2, 3] + frame[r, 3] * tool[3, 3])
-    for i in range(3):
-        rx = foot[0] - points[i, 0]
-        ry = foot[1] - points[i, 1]
-        rz = foot[2] - points[i, 2]
-        jacobian[0, i] = axes[i, 1] * rz - axes[i, 2] * ry
-        jacobian[1, i] = axes[i, 2] * rx - axes[i, 0] * rz
-        jacobian[2, i] = axes[i, 0] * ry - axes[i, 1] * rx
-    return foot
-
-
-def _single(table: DHTable, angles: Array) -> tuple[Array, Array]:
-    jacobian = np.empty((3, 3))
-    foot = _single_leg_chain(table.theta_offset, table.d, table.alpha, table.a, table.base,
-                             table.tool, np.ascontiguousarray(angles, dtype=float), jacobian)
-    return foot, jacobian
+    rows, shape = _rows(angles)
+    frames = np.empty((len(rows), 4, 4, 4))
+    _leg_frames_batch(table.theta_offset, table.d, table.alpha, table.a, table.base, rows,
+                      frames)
+    return frames.reshape(*shape, 4, 4, 4)
 
 
 def forward_kinematics_dh(table: DHTable, angles: ArrayLike) -> Array:
@@ -355,11 +338,7 @@ def forward_kinematics_dh(table: DHTable, angles: ArrayLike) -> Array:
     ndarray, shape (..., 3)
         Foot position in the geometry frame [m].
     """
-    angles = np.asarray(angles, dtype=float)
-    if angles.shape == (3,):
-        return _single(table, angles)[0]
-    last = dh_frames(table, angles)[..., 3, :, :]
-    return (last @ table.tool[:, 3])[..., :3]
+    return _chain(table, angles)[0]
 
 
 def foot_jacobian(model: DHTable | LegGeometry, angles: ArrayLike) -> Array:
@@ -380,10 +359,4 @@ def foot_jacobian(model: DHTable | LegGeometry, angles: ArrayLike) -> Array:
         d(foot)/d(angles) [m/rad]; rows foot x, y, z, columns alpha, beta, gamma.
     """
     table = model if isinstance(model, DHTable) else dh_from_geometry(model)
-    angles = np.asarray(angles, dtype=float)
-    if angles.shape == (3,):
-        return _single(table, angles)[1]
-    frames = dh_frames(table, angles)  # z axis of frame i-1 is the current axis of joint i
-    axes, points = frames[..., :3, :3, 2], frames[..., :3, :3, 3]
-    foot = (frames[..., 3, :, :] @ table.tool[:, 3])[..., None, :3]
-    return np.swapaxes(np.cross(axes, foot - points), -1, -2)
+    return _chain(table, angles)[1]
