@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumaquad.io.recording import (
+from pneumaquad.io.run_folder import (
+    RunFolderWriter,
     RunRecorder,
     create_run_folder,
     read_recording,
-    write_summary,
 )
 from pneumaquad.reporting import plotting
 
@@ -99,8 +99,7 @@ def test_empty_recording_and_bad_shapes(tmp_path: Path) -> None:
 
 
 def test_summary_handles_numpy_and_nan(tmp_path: Path) -> None:
-    path = write_summary(
-        tmp_path,
+    path = RunFolderWriter(tmp_path).write_summary(
         {
             "rmse [m]": np.float64(0.0012),
             "steps": np.int64(3),

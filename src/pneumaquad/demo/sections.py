@@ -118,7 +118,7 @@ def _foot_cycle(folder: Path, report: Report) -> None:
 
 
 def _walk(folder: Path, report: Report) -> None:
-    from pneumaquad.io.recording import write_summary
+    from pneumaquad.io.run_folder import RunFolderWriter
     from pneumaquad.locomotion.walking import (
         WalkSettings,
         tip_over_series,
@@ -134,7 +134,7 @@ def _walk(folder: Path, report: Report) -> None:
     tip_over = tip_over_series(run.recording, run.summary, simulation.robot, plan)
     outcome = walking_outcome(run.recording, run.summary, settings, simulation.robot,
                               tip_over)
-    write_summary(folder / "robot-walk", {**run.summary, "walking": outcome})
+    RunFolderWriter(folder / "robot-walk").update_summary({"walking": outcome})
     figure = plot_walking(run.recording, simulation.robot.legs,
                           folder / "robot-walk" / "walking.png", tip_over,
                           "Crawl gait on flat ground (two cycles)")

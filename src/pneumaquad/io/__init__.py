@@ -1,2 +1,3 @@
-"""Run folders and recordings (one writer, one reader), lab-data import and the
+"""Run folders (:mod:`.run_folder`: one versioned layout, one writer, one reader) and the
+table files below them (:mod:`.tables`), lab-data import (:mod:`.measured`) and the
 interruption handling that keeps a recording readable."""

@@ -1,22 +1,23 @@
 """Run-folder output of a networked peer: robot recording, packet log, timing figures.
 
-:class:`NetworkRecording` buffers recording rows and hands them to a
-:class:`~pneumaquad.io.recording.RunRecorder` in blocks (``recording.csv`` stays readable
-while the run goes on; ``recording.parquet`` on close). :func:`write_network_files`
-writes ``packets.parquet``, ``timing.json`` (:func:`~pneumaquad.network.timing.timing_summary`
-plus the caller's figures), ``rtt.png`` and ``timeline.png``.
+:class:`NetworkRecording` buffers recording rows and hands them to the run folder's
+recorder in blocks (``recording.csv`` stays readable while the run goes on;
+``recording.parquet`` on close). :func:`write_network_files` writes ``packets.parquet``,
+``timing.json`` (:func:`~pneumaquad.network.timing.timing_summary` plus the caller's
+figures), ``rtt.png`` and ``timeline.png``; :func:`write_run_description` the parameters,
+model and summary. Every file of the run folder goes through
+:class:`~pneumaquad.io.run_folder.RunFolderWriter` (docs/run-folder.md).
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from pneumaquad.io.recording import RunRecorder, jsonable
+from pneumaquad.io.run_folder import RunFolderWriter
 from pneumaquad.network.packet_log import PacketLog
 from pneumaquad.network.timing import timing_summary
 
@@ -37,7 +38,7 @@ class NetworkRecording:
     """
 
     def __init__(self, folder: Path, columns: Sequence[str]) -> None:
-        self.recorder = RunRecorder(folder, columns)
+        self.recorder = RunFolderWriter(folder).recorder(columns)
         self.width = len(columns)
         self._buffer = np.empty((_BLOCK_ROWS, self.width))
         self._rows = 0
@@ -85,9 +86,10 @@ def write_network_files(folder: Path, log: PacketLog, control_step: float,
         The content of ``timing.json``.
     """
     folder = Path(folder)
-    log.write(folder / "packets.parquet")
+    writer = RunFolderWriter(folder)
+    log.write(writer.packets_path)
     summary = dict(timing_summary(log, control_step)) | dict(extra)
-    (folder / "timing.json").write_text(json.dumps(jsonable(summary), indent=2))
+    writer.write_timing(summary)
     if plots and len(log):
         from pneumaquad.network.timing_plots import plot_packet_timeline, plot_rtt_histogram
 
@@ -99,13 +101,7 @@ def write_network_files(folder: Path, log: PacketLog, control_step: float,
 def write_run_description(folder: Path, robot: Any, summary: Mapping[str, Any]) -> None:
     """Write ``parameters.toml``, ``model.xml`` and ``summary.json`` of a networked run, so
     that ``pneumaquad report`` and ``pneumaquad video`` read it like any robot run."""
-    from pneumaquad.io.recording import write_summary
-    from pneumaquad.params import resolved_parameters_toml
-
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "parameters.toml").write_text(
-        resolved_parameters_toml(robot.parameters), encoding="utf-8"
-    )
-    (folder / "model.xml").write_text(robot.to_xml(), encoding="utf-8")
-    write_summary(folder, jsonable(dict(summary)))
+    writer = RunFolderWriter(folder)
+    writer.write_parameters(robot.parameters)
+    writer.write_model(robot.to_xml())
+    writer.write_summary(summary)

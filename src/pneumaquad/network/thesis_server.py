@@ -17,7 +17,6 @@ values are dropped and counted by reason.
 
 from __future__ import annotations
 
-import json
 import select
 import socket
 import time
@@ -27,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from pneumaquad.io.recording import jsonable
+from pneumaquad.io.run_folder import RunFolderWriter
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.endpoint import DEFAULT_HOST, Address
 from pneumaquad.network.run_output import NetworkRecording, write_run_description
@@ -179,7 +178,7 @@ class ThesisServer:
         if self.divergence is not None:
             summary["error"] = self.divergence
         if self.folder is not None:
-            (self.folder / "timing.json").write_text(json.dumps(jsonable(summary), indent=2))
+            RunFolderWriter(self.folder).write_timing(summary)
             write_run_description(self.folder, self.side.robot, summary)
         self.socket.close()
         return summary

@@ -7,8 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from pneumaquad.io.recording import RunRecorder, write_summary
-from pneumaquad.params import resolved_parameters_toml
+from pneumaquad.io.run_folder import RunFolderWriter
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.reporting.plotting import plot_rig_run
 from pneumaquad.rig.metrics import general_metrics, step_metrics, tracking_metrics
@@ -25,7 +24,8 @@ def run_rig_experiment(
     progress: Callable[[int, int], None] | None = None,
     extra: dict[str, Any] | None = None,
 ) -> tuple[RigResult, dict[str, Any]]:
-    """Run one rig experiment and write its run folder.
+    """Run one rig experiment and write its run folder (through
+    :class:`~pneumaquad.io.run_folder.RunFolderWriter`, docs/run-folder.md).
 
     The folder receives ``parameters.toml`` (resolved, SI, loadable again),
     ``recording.csv`` (flushed as the run goes) and ``recording.parquet``,
@@ -44,10 +44,10 @@ def run_rig_experiment(
     RigDivergedError
         After writing the folder, when a recorded value became non-finite.
     """
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "parameters.toml").write_text(resolved_parameters_toml(setup), encoding="utf-8")
+    writer = RunFolderWriter(folder)
+    writer.write_parameters(setup)
     failure: RigDivergedError | None = None
-    with RunRecorder(folder, RIG_COLUMNS) as recorder:
+    with writer.recorder(RIG_COLUMNS) as recorder:
         try:
             result = simulate_rig(
                 setup, signal, closed_loop, recorder=recorder, progress=progress
@@ -81,7 +81,7 @@ def run_rig_experiment(
         elif failure is None and step_time is not None:
             summary.update(step_metrics(recording, step_time))
         plot_rig_run(recording, folder / "rig.png", title=description)
-    write_summary(folder, summary)
+    writer.write_summary(summary)
     if failure is not None:
         raise failure
     return result, summary

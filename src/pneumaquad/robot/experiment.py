@@ -3,7 +3,8 @@
 An experiment is a list of :class:`Phase` objects. Each phase sets which joints are under
 closed-loop control, which get an open-loop valve voltage and which are left with their
 valve at its offset, and gives the joint-angle references as a function of time. The
-runner plays them at the control rate and writes the run folder:
+runner plays them at the control rate and writes the run folder through
+:class:`pneumaquad.io.run_folder.RunFolderWriter` (docs/run-folder.md):
 
 ``parameters.toml``   resolved robot parameters (SI, loadable again)
 ``model.xml``         the MuJoCo model (open it in MuJoCo's viewer)
@@ -27,8 +28,7 @@ from typing import Any
 import numpy as np
 
 from pneumaquad.io.interruption import deferred_interrupt
-from pneumaquad.io.recording import RunRecorder, write_summary
-from pneumaquad.params import resolved_parameters_toml
+from pneumaquad.io.run_folder import RunFolderWriter
 
 from .coupling import MODE_CLOSED_LOOP, MODE_OPEN_LOOP, MODE_UNCOMMANDED
 from .recording import recording_columns, recording_row
@@ -125,11 +125,9 @@ def run_phases(
 ) -> RobotRun:
     """Play ``phases`` on ``simulation`` and write the run folder (module docstring)."""
     robot = simulation.robot
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "parameters.toml").write_text(
-        resolved_parameters_toml(robot.parameters), encoding="utf-8"
-    )
-    (folder / "model.xml").write_text(robot.to_xml(), encoding="utf-8")
+    writer = RunFolderWriter(folder)
+    writer.write_parameters(robot.parameters)
+    writer.write_model(robot.to_xml())
     every = robot.parameters.simulation.recording_every
     dt = simulation.control_step
     count = robot.joint_count
@@ -141,7 +139,7 @@ def run_phases(
     phase_starts = []
     controlled = np.zeros(count, dtype=bool)
     failure: Exception | None = None
-    with RunRecorder(folder, columns) as recorder, deferred_interrupt() as stop:
+    with writer.recorder(columns) as recorder, deferred_interrupt() as stop:
         recorder.append(recording_row(simulation, simulation.reference_angles))
         times.append(simulation.time)
         qpos.append(simulation.data.qpos.copy())
@@ -182,7 +180,7 @@ def run_phases(
             failure = error  # keep what was recorded before it; re-raised below
         recording = recorder.to_arrays()
     wall = time.perf_counter() - started
-    np.savez(folder / "trajectory.npz", time=np.array(times), qpos=np.array(qpos))
+    writer.write_trajectory(np.array(times), np.array(qpos))
     summary = _summary(
         simulation, recording, description, wall, interrupted, phase_starts, controlled
     )
@@ -193,7 +191,7 @@ def run_phases(
     if failure is not None:
         summary["error"] = str(failure)
         summary["diverged at [s]"] = failure.time
-    write_summary(folder, summary)
+    writer.write_summary(summary)
     if failure is not None:
         raise failure
     return RobotRun(recording, summary, interrupted, wall, folder)

@@ -1,0 +1,168 @@
+"""Float tables on disk: a CSV streamed while a run goes on, Parquet once it closes.
+
+The file formats below the run folder (:mod:`pneumaquad.io.run_folder`, which names the
+files): :class:`StreamedTable` appends float64 rows to a CSV file, flushing each block so
+that an interrupted or killed run still leaves a readable file, and writes the whole
+table as Parquet on close; :func:`read_table` reads either file back as one float64 array
+per column.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Sequence
+from pathlib import Path
+from types import TracebackType
+from typing import Self
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+__all__ = ["StreamedTable", "read_table"]
+
+
+class StreamedTable:
+    """Append-only float64 table: ``csv_path`` written live, ``parquet_path`` on close.
+
+    Use as a context manager; the Parquet file is written on exit even when the body
+    raises (including ``KeyboardInterrupt``), and the exception propagates.
+
+    Parameters
+    ----------
+    csv_path, parquet_path
+        Files to write (their folder is created).
+    columns
+        Column names, ``quantity [unit]`` in SI units.
+    """
+
+    def __init__(self, csv_path: Path, parquet_path: Path, columns: Sequence[str]) -> None:
+        self.csv_path = Path(csv_path)
+        self.parquet_path = Path(parquet_path)
+        self.csv_path.parent.mkdir(parents=True, exist_ok=True)
+        self.columns: tuple[str, ...] = tuple(columns)
+        if not self.columns:
+            raise ValueError("at least one column is required")
+        if len(set(self.columns)) != len(self.columns):
+            raise ValueError(f"duplicate column names: {self.columns}")
+        self._blocks: list[np.ndarray] = []
+        self._rows = 0
+        self._closed = False
+        self._file: io.TextIOWrapper | None = self.csv_path.open("w", newline="")
+        csv.writer(self._file).writerow(self.columns)
+        self._file.flush()
+
+    @property
+    def rows_written(self) -> int:
+        """Number of rows appended so far."""
+        return self._rows
+
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` has run."""
+        return self._closed
+
+    def append(self, block: np.ndarray) -> None:
+        """Append rows to the table.
+
+        Parameters
+        ----------
+        block
+            Array of shape ``(n, len(columns))``; a 1-D array of length
+            ``len(columns)`` is taken as a single row.
+        """
+        if self._file is None:
+            raise RuntimeError("recorder is closed")
+        data = np.asarray(block, dtype=np.float64)
+        if data.ndim == 1:
+            data = data.reshape(1, -1)
+        if data.ndim != 2 or data.shape[1] != len(self.columns):
+            raise ValueError(
+                f"expected a block of shape (n, {len(self.columns)}), got {np.shape(block)}"
+            )
+        if data.shape[0] == 0:
+            return
+        np.savetxt(self._file, data, delimiter=",", fmt="%.17g")
+        self._file.flush()
+        self._blocks.append(data.copy())
+        self._rows += data.shape[0]
+
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """All rows appended so far, one float64 array per column."""
+        if self._blocks:
+            table = np.concatenate(self._blocks, axis=0)
+        else:
+            table = np.empty((0, len(self.columns)))
+        return {name: table[:, i].copy() for i, name in enumerate(self.columns)}
+
+    def close(self) -> None:
+        """Close the CSV and write the Parquet file. Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+        arrays = self.to_arrays()
+        table = pa.table(
+            {name: pa.array(values, type=pa.float64()) for name, values in arrays.items()}
+        )
+        pq.write_table(table, self.parquet_path)
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        # Never leave a dangling handle; the Parquet file is only written by close().
+        file = getattr(self, "_file", None)
+        if file is not None:
+            file.close()
+
+
+def read_table(path: Path) -> dict[str, np.ndarray]:
+    """Read a ``.parquet`` or ``.csv`` table as one float64 array per column.
+
+    A CSV whose last line has no line end (a run killed in the middle of writing it)
+    is read without that line.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` does not exist.
+    ValueError
+        For an empty CSV file or numbers that cannot be read.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"no recording at {path}")
+    if path.suffix == ".parquet":
+        table = pq.read_table(path)
+        return {
+            name: np.asarray(table.column(name).to_numpy(), dtype=np.float64)
+            for name in table.column_names
+        }
+    with path.open(newline="") as handle:
+        header = next(csv.reader(handle), None)
+        if header is None:
+            raise ValueError(f"empty recording file {path}")
+        text = handle.read()
+    lines = text.splitlines()
+    # Every complete row ends with a newline; a run killed mid-write may leave
+    # a truncated, unterminated last line, which is dropped.
+    if lines and not text.endswith(("\n", "\r")):
+        lines.pop()
+    lines = [line for line in lines if line.strip()]
+    if lines:
+        data = np.loadtxt(lines, delimiter=",", dtype=np.float64, ndmin=2)
+    else:
+        data = np.empty((0, len(header)))
+    return {name: data[:, i].copy() for i, name in enumerate(header)}
