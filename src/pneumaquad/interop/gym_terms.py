@@ -25,7 +25,6 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from pneumaquad.core.layout import P_R
 from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
 from pneumaquad.robot.recording import thorax_attitude
 from pneumaquad.robot.simulation import RobotSimulation
@@ -109,7 +108,9 @@ def write_observation(simulation: RobotSimulation, to_body: np.ndarray,
 
 def normal_litres(simulation: RobotSimulation, mass: float) -> float:
     """Volume [NL] at normal conditions (0 °C, 101.325 kPa) of ``mass`` [kg] of air."""
-    return mass * float(simulation.params[0, P_R]) * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1e3
+    robot = simulation.robot
+    gas_constant = robot.actuators[robot.joint_types[0]].gas.gas_constant  # [J/(kg K)]
+    return mass * gas_constant * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1e3
 
 
 @dataclass(frozen=True)
