@@ -135,6 +135,12 @@ def test_actions_outside_the_box_are_clipped_into_it() -> None:
             env.step(np.full(12, np.nan))
 
 
+def test_step_before_reset_is_refused() -> None:
+    env = QuadrupedEnv(settle_time=0.0)
+    with pytest.raises(RuntimeError, match=r"reset\(\) first"):
+        env.step(env.initial_angles)
+
+
 def test_control_period_option() -> None:
     env = QuadrupedEnv(control_period=0.01, settle_time=0.1)
     env.reset(seed=0)

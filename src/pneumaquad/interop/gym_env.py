@@ -164,6 +164,7 @@ class QuadrupedEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         self._start_air = 0.0  # [kg] drawn at the end of reset
         self._to_normal_litres = normal_litres(self.sim, 1.0)
         self._diverged = False
+        self._reset_done = False
 
     # --- gymnasium API -----------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -181,6 +182,7 @@ class QuadrupedEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         sim.set_pose(angles, thorax_position=thorax, thorax_quaternion=sim.data.qpos[3:7].copy())
         sim.command_angles(self.initial_angles)
         self._diverged = False
+        self._reset_done = True
         if self.settle_steps:
             sim.step(self.settle_steps)
         thorax_position = sim.data.xpos[sim.robot.thorax_id]
@@ -193,8 +195,9 @@ class QuadrupedEnv(gymnasium.Env[np.ndarray, np.ndarray]):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Hold ``action`` for one control period; returns (observation, reward,
         terminated, truncated, info) with the reward of :mod:`.gym_terms`."""
-        if self._diverged:
-            raise RuntimeError("the simulation diverged in this episode: call reset()")
+        if self._diverged or not self._reset_done:
+            raise RuntimeError("call reset() first" if not self._reset_done else
+                               "the simulation diverged in this episode: call reset()")
         command = np.asarray(action, dtype=np.float64).reshape(self.action_space.shape)
         if not np.all(np.isfinite(command)):
             raise ValueError(f"the action must be finite, got {action!r}")
