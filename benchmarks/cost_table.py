@@ -20,7 +20,6 @@ import numpy as np
 from numba import njit
 
 from _bench import machine_line, stats, table, write_json
-from pneumaquad.core import layout
 from pneumaquad.core.physics.friction import friction_damping
 from pneumaquad.core.physics.valve import input_pressure, polynomial_area, simple_valve_area
 from pneumaquad.core.pneumatics import friction_of
@@ -68,17 +67,17 @@ def friction_loop(p, velocities):
     total = 0.0
     for v in velocities:
         total += friction_of(p, v, 0.0) + friction_damping(
-            int(p[layout.P_FRICTION_MODEL]),
+            p.friction_model,
             v,
-            p[layout.P_FS],
-            p[layout.P_FC],
-            p[layout.P_CV],
-            p[layout.P_VS],
-            p[layout.P_EXPONENT],
-            p[layout.P_KTANH],
-            p[layout.P_DAMPING],
-            p[layout.P_SIGMA0],
-            p[layout.P_SIGMA1],
+            p.static_force,
+            p.coulomb_force,
+            p.viscous_coefficient,
+            p.stribeck_velocity,
+            p.stribeck_exponent,
+            p.tanh_coefficient,
+            p.damping_coefficient,
+            p.bristle_stiffness,
+            p.bristle_damping,
             0.0,
         )
     return total
@@ -91,10 +90,10 @@ def component_costs(setup: RigSetup, repeats: int) -> list[tuple[str, float, flo
     centered, velocities = 2.0 * wave, 0.05 * wave
     row = pack_rig_parameters(setup)[0]
     viscous = pack_rig_parameters(load_rig("thesis-rig", overrides=['friction.model="viscous"']))[0]
-    neg = row[layout.P_CAP_POLY_NEG : layout.P_CAP_POLY_NEG + 5].copy()
-    pos = row[layout.P_CAP_POLY_POS : layout.P_CAP_POLY_POS + 5].copy()
-    ps, pe = row[layout.P_PS], row[layout.P_PE]
-    hi, lo = row[layout.P_CAP_HIGH_CUTOFF], row[layout.P_CAP_LOW_CUTOFF]
+    neg = row["cap_polynomial_negative"].copy()
+    pos = row["cap_polynomial_positive"].copy()
+    ps, pe = row["supply_pressure"], row["exhaust_pressure"]
+    hi, lo = row["cap_high_pressure_cutoff"], row["cap_low_pressure_cutoff"]
     calls = {
         "poly": lambda: polynomial_loop(centered, neg, pos),
         "linear": lambda: linear_loop(centered, 1e-5, 2e-7, 5.0),

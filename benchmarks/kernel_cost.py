@@ -31,7 +31,7 @@ from numba import njit
 
 from _bench import Stats, machine_line, run_child, stats, table, write_json
 from pneumaquad.core import layout
-from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.actuator import initial_state, new_outputs, pack_parameters, supply_state
 from pneumaquad.core.kernel import step_actuators
 from pneumaquad.core.pneumatics import pneumatic_rates, port_flow, valve_connections
 from pneumaquad.params import load_actuator, load_rig
@@ -76,7 +76,7 @@ class Workload:
 
 
 def build_workload(
-    row: np.ndarray,
+    row: np.void,
     supply: np.ndarray,
     count: int,
     steps: int,
@@ -84,22 +84,26 @@ def build_workload(
     command_amplitude: float,
 ) -> Workload:
     """Sinusoidal piston motion (1 Hz, ±35 % stroke) and commands (3 Hz around the offset)."""
-    stroke = row[layout.P_STROKE]
+    stroke = row["stroke"]
     times = np.arange(steps)[:, None] * control_step
     phases = np.linspace(0.0, 2.0 * np.pi, count, endpoint=False)[None, :]
     omega = 2.0 * np.pi * 1.0
     amplitude = 0.35 * stroke
     positions = 0.5 * stroke + amplitude * np.sin(omega * times + phases)
     velocities = amplitude * omega * np.cos(omega * times + phases)
-    commands = row[layout.P_OFFSET] + command_amplitude * np.sin(2 * np.pi * 3.0 * times + phases)
-    middle = 0.5 * (row[layout.P_PS] + row[layout.P_PE])
-    state = np.vstack([initial_state(row, positions[0, i], middle, middle) for i in range(count)])
-    return Workload(np.tile(row, (count, 1)), state, supply, commands, positions, velocities)
+    commands = row["offset_voltage"] + command_amplitude * np.sin(
+        2 * np.pi * 3.0 * times + phases)
+    middle = 0.5 * (row["supply_pressure"] + row["exhaust_pressure"])
+    params = np.full(count, row, dtype=layout.ACTUATOR_PARAMETERS_DTYPE)
+    state = np.zeros(count, layout.ACTUATOR_STATE_DTYPE)
+    for i in range(count):
+        initial_state(row, positions[0, i], middle, middle, out=state[i])
+    return Workload(params, state, supply, commands, positions, velocities)
 
 
 def time_once(work: Workload, control_step: float, substeps: int, compiled: bool) -> float:
     """Seconds per ``step_actuators`` call over the workload, from a fresh state."""
-    outputs = np.zeros((work.params.shape[0], layout.N_OUTPUTS))
+    outputs = new_outputs(work.params.shape[0])
     state, supply = work.state.copy(), work.supply.copy()
     cmd, pos, vel = work.commands, work.positions, work.velocities
     start = time.perf_counter()
@@ -119,7 +123,7 @@ def time_once(work: Workload, control_step: float, substeps: int, compiled: bool
                 outputs,
             )
     seconds = (time.perf_counter() - start) / cmd.shape[0]
-    if not np.all(np.isfinite(state)):
+    if not np.all(np.isfinite(layout.float_view(state))):
         raise FloatingPointError("kernel state is not finite")
     return seconds
 
@@ -176,24 +180,25 @@ def flow_loop(p, upstream, downstream):
     return total
 
 
-def breakdown(row: np.ndarray, substeps: int, repeats: int) -> dict[str, float]:
+def breakdown(row: np.void, substeps: int, repeats: int) -> dict[str, float]:
     """ns per actuator-step spent in the valve map and the chamber rates (quick profile)."""
     n = 20000
     wave = np.sin(np.linspace(0.0, 40.0 * np.pi, n))  # smooth, like a driven actuator
     centered = 2.0 * wave
-    pressures = row[layout.P_PE] + (row[layout.P_PS] - row[layout.P_PE]) * (0.5 + 0.45 * wave)
+    exhaust, supply = row["exhaust_pressure"], row["supply_pressure"]
+    pressures = exhaust + (supply - exhaust) * (0.5 + 0.45 * wave)
     velocities = 0.1 * np.cos(np.linspace(0.0, 40.0 * np.pi, n))
     figures = {}
     for name, call, per_step in (
         (
             # once per control step; once per substep only with a spool lag
             "valve_connections (1 per step)",
-            lambda: valve_loop(row, centered, row[layout.P_PS]),
+            lambda: valve_loop(row, centered, supply),
             1,
         ),
         (
             "pneumatic_rates (2 per substep)",
-            lambda: rates_loop(row, pressures, velocities, row[layout.P_PS], 5e-7),
+            lambda: rates_loop(row, pressures, velocities, supply, 5e-7),
             2 * substeps,
         ),
         (
@@ -216,20 +221,20 @@ CHILD = r"""
 import json, sys, time
 t0 = time.perf_counter()
 import numpy as np
-from pneumaquad.core import layout
-from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.actuator import (
+    initial_state, new_outputs, pack_parameter_array, supply_state)
 from pneumaquad.core.kernel import step_actuators
 from pneumaquad.params import load_actuator
 t1 = time.perf_counter()
 cfg = json.loads(sys.argv[1])
-row = pack_parameters(load_actuator("crr-gamma"))
 n = cfg["count"]
-params = np.tile(row, (n, 1))
-mid = 0.5 * (row[layout.P_PS] + row[layout.P_PE])
-state = np.vstack([initial_state(row, 0.02, mid, mid)] * n)
+params = pack_parameter_array([load_actuator("crr-gamma")] * n)
+row = params[0]
+mid = 0.5 * (row["supply_pressure"] + row["exhaust_pressure"])
+state = np.array([initial_state(row, 0.02, mid, mid)] * n)
 supply = supply_state(load_actuator("crr-gamma"))
-out = np.zeros((n, layout.N_OUTPUTS))
-cmd = np.full(n, row[layout.P_OFFSET] + 1.0)
+out = new_outputs(n)
+cmd = np.full(n, row["offset_voltage"] + 1.0)
 pos = np.full(n, 0.02)
 vel = np.full(n, 0.05)
 t2 = time.perf_counter()

@@ -54,10 +54,13 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from pneumaquad.core import layout
-from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.actuator import (
+    initial_state,
+    new_outputs,
+    pack_parameter_array,
+    supply_state,
+)
 from pneumaquad.core.kernel import step_actuators
-from pneumaquad.core.layout import P_PATM, P_PE, P_PS
 from pneumaquad.io.recording import read_recording
 from pneumaquad.locomotion.stance_control import StanceControlSettings, track_stance_loads
 from pneumaquad.locomotion.walking import WALKING_ANGLES
@@ -86,18 +89,18 @@ def stall_forces() -> dict[str, tuple[float, float, float]]:
     result = {}
     for joint in JOINTS:
         actuator = load_actuator(f"crr-{joint}")
-        row = pack_parameters(actuator)[None, :]
-        position = 0.5 * row[0, layout.P_STROKE]
-        atmosphere = row[0, layout.P_PATM]
+        params = pack_parameter_array([actuator])
+        position = 0.5 * params[0]["stroke"]
+        atmosphere = params[0]["atmospheric_pressure"]
         forces = []
         for voltage in (10.0, 0.0):
-            state = initial_state(row[0], position, atmosphere, atmosphere)[None, :].copy()
+            state = np.array([initial_state(params[0], position, atmosphere, atmosphere)])
             supply = supply_state(actuator)
-            out = np.zeros((1, layout.N_OUTPUTS))
+            out = new_outputs(1)
             for _ in range(3000):
-                step_actuators(row, state, np.array([voltage]), np.array([position]),
+                step_actuators(params, state, np.array([voltage]), np.array([position]),
                                np.zeros(1), 1e-3, 1, supply, out)
-            forces.append(float(out[0, layout.O_PNEUMATIC_FORCE]))
+            forces.append(float(out[0]["pneumatic_force"]))
         result[joint] = (forces[0], -forces[1], actuator.friction.static_force)
     return result
 
@@ -172,17 +175,17 @@ def _volumes(sim: RobotSimulation) -> tuple[np.ndarray, np.ndarray]:
     from pneumaquad.core.physics.chamber import chamber_volume_cap, chamber_volume_rod
 
     p, x = sim.params, sim.positions
-    cap = np.array([chamber_volume_cap(x[i], p[i, layout.P_CAP_AREA], p[i, layout.P_CAP_DEAD])
+    cap = np.array([chamber_volume_cap(x[i], p[i]["cap_area"], p[i]["cap_dead_length"])
                     for i in range(len(x))])
-    rod = np.array([chamber_volume_rod(x[i], p[i, layout.P_STROKE], p[i, layout.P_ROD_AREA],
-                                       p[i, layout.P_ROD_DEAD]) for i in range(len(x))])
+    rod = np.array([chamber_volume_rod(x[i], p[i]["stroke"], p[i]["rod_area"],
+                                       p[i]["rod_dead_length"]) for i in range(len(x))])
     return cap, rod
 
 
 def energy() -> None:
     sim = _released(gravity=False, seal_friction=False)
     p = sim.params
-    n = p[:, layout.P_K] * p[:, layout.P_R] / p[:, layout.P_CP] + 1.0
+    n = p["heat_capacity_ratio"] * p["gas_constant"] / p["specific_heat_cp"] + 1.0
     rows = []
     for _ in range(1000):  # 10 s in 10 ms chunks
         sim.step(10)
@@ -191,8 +194,8 @@ def energy() -> None:
         kinetic = 0.5 * float(sim.data.qvel @ momentum)
         cap, rod = _volumes(sim)
         s = sim.state
-        gas = (s[:, layout.S_CAP_PRESSURE] * cap + s[:, layout.S_ROD_PRESSURE] * rod) / (n - 1)
-        atmosphere = p[:, P_PATM] * (p[:, layout.P_CAP_AREA] - p[:, layout.P_ROD_AREA]) \
+        gas = (s["cap_pressure"] * cap + s["rod_pressure"] * rod) / (n - 1)
+        atmosphere = p["atmospheric_pressure"] * (p["cap_area"] - p["rod_area"]) \
             * sim.positions
         rows.append((sim.time, kinetic, float(np.sum(gas + atmosphere))))
         if not np.isfinite(rows[-1][2]) or (len(rows) > 1 and rows[-1][0] < rows[-2][0]):
@@ -211,8 +214,7 @@ def energy() -> None:
     def invariants() -> np.ndarray:
         cap, rod = _volumes(sim)
         s = sim.state
-        return np.concatenate([s[:, layout.S_CAP_PRESSURE] * cap**n,
-                               s[:, layout.S_ROD_PRESSURE] * rod**n])
+        return np.concatenate([s["cap_pressure"] * cap**n, s["rod_pressure"] * rod**n])
 
     start, initial = invariants(), sim.positions.copy()
     worst, travel = 0.0, 0.0
@@ -258,9 +260,9 @@ def vented_joint_travel(joint: str, load_ratio: float, *overrides: str,
         sim.model.tendon_solref_fri[:] = (0.02, 1.0)
         sim.model.tendon_solimp_fri[:] = (0.9, 0.95, 0.001, 0.5, 2.0)
     sim.model.opt.gravity[:] = 0.0
-    atmosphere = sim.params[:, P_PATM]
-    sim.params[:, P_PS] = atmosphere
-    sim.params[:, P_PE] = atmosphere
+    atmosphere = sim.params["atmospheric_pressure"]
+    sim.params["supply_pressure"] = atmosphere
+    sim.params["exhaust_pressure"] = atmosphere
     sim.set_pose(POSE, chamber_pressure=float(atmosphere[0]))
     sim.release()
     i = sim.robot.joint_names.index(f"front_right_{joint}")

@@ -20,7 +20,12 @@ import numpy as np
 import pytest
 
 from pneumaquad.core import layout
-from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.actuator import (
+    initial_state,
+    new_outputs,
+    pack_parameter_array,
+    supply_state,
+)
 from pneumaquad.params import load_actuator, load_rig
 from pneumaquad.params.schema import ActuatorParameters, RigSetup
 from pneumaquad.rig.simulate import RigResult, simulate_rig
@@ -91,17 +96,13 @@ class Actuators:
     """N externally driven actuators for :func:`pneumaquad.core.kernel.step_actuators`."""
 
     def __init__(self, actuators, positions, cap_pressures, rod_pressures):
-        self.params = np.vstack([pack_parameters(a) for a in actuators])
-        self.state = np.vstack(
-            [
-                initial_state(row, x, pc, pr)
-                for row, x, pc, pr in zip(
-                    self.params, positions, cap_pressures, rod_pressures, strict=True
-                )
-            ]
-        )
+        self.params = pack_parameter_array(actuators)
+        self.state = np.zeros(len(actuators), layout.ACTUATOR_STATE_DTYPE)
+        starts = zip(positions, cap_pressures, rod_pressures, strict=True)
+        for i, (x, pc, pr) in enumerate(starts):
+            initial_state(self.params[i], x, pc, pr, out=self.state[i])
         self.supply = supply_state(actuators[0])
-        self.outputs = np.zeros((len(actuators), layout.N_OUTPUTS))
+        self.outputs = new_outputs(len(actuators))
 
 
 @pytest.fixture(scope="session")

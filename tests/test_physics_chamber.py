@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from conftest import CP_AIR, K_AIR, R_AIR, TS, Actuators, cap_volume, rig_setup, rod_volume, run_rig
-from pneumaquad.core import layout
 from pneumaquad.core.kernel import step_actuators
 from pneumaquad.core.physics.chamber import (
     THERMO_ADIABATIC,
@@ -73,7 +72,7 @@ def test_choked_filling_slope_kernel(centered: float) -> None:
     expected = choked_fill_rate(area, ps, volume)
     dt = 1e-3
     command = np.array([act.valve.offset_voltage + centered])
-    pressures = [acts.state[0, layout.S_CAP_PRESSURE]]
+    pressures = [acts.state[0]["cap_pressure"]]
     for _ in range(5):
         step_actuators(
             acts.params,
@@ -86,9 +85,9 @@ def test_choked_filling_slope_kernel(centered: float) -> None:
             acts.supply,
             acts.outputs,
         )
-        pressures.append(acts.state[0, layout.S_CAP_PRESSURE])
+        pressures.append(acts.state[0]["cap_pressure"])
         mass_flow = area * C2 * ps / math.sqrt(TS)
-        assert acts.outputs[0, layout.O_CAP_FLOW] == pytest.approx(mass_flow, rel=1e-9)
+        assert acts.outputs[0]["cap_mass_flow"] == pytest.approx(mass_flow, rel=1e-9)
     pressures = np.array(pressures)
     assert pressures[-1] < 0.528 * ps  # still choked at the end
     slopes = np.diff(pressures) / dt
@@ -137,9 +136,9 @@ def compress_closed(thermo: str = "adiabatic"):
     acts = Actuators([act], [x0], [1.5e5], [3.0e5])
     command = np.array([act.valve.offset_voltage])  # centered 0: area 0 without a leak
     x = [x0]
-    pc = [acts.state[0, layout.S_CAP_PRESSURE]]
-    pr = [acts.state[0, layout.S_ROD_PRESSURE]]
-    masses = [acts.state[0, [layout.S_CAP_MASS, layout.S_ROD_MASS]].copy()]
+    pc = [acts.state[0]["cap_pressure"]]
+    pr = [acts.state[0]["rod_pressure"]]
+    masses = [np.array([acts.state[0]["cap_mass"], acts.state[0]["rod_mass"]])]
     for k in range(steps):
         step_actuators(
             acts.params,
@@ -152,10 +151,10 @@ def compress_closed(thermo: str = "adiabatic"):
             acts.supply,
             acts.outputs,
         )
-        x.append(acts.state[0, layout.S_POSITION])
-        pc.append(acts.state[0, layout.S_CAP_PRESSURE])
-        pr.append(acts.state[0, layout.S_ROD_PRESSURE])
-        masses.append(acts.state[0, [layout.S_CAP_MASS, layout.S_ROD_MASS]].copy())
+        x.append(acts.state[0]["position"])
+        pc.append(acts.state[0]["cap_pressure"])
+        pr.append(acts.state[0]["rod_pressure"])
+        masses.append(np.array([acts.state[0]["cap_mass"], acts.state[0]["rod_mass"]]))
     x = np.array(x)
     return setup, x, np.array(pc), np.array(pr), np.array(masses)
 

@@ -6,11 +6,24 @@ import numpy as np
 import pytest
 
 from conftest import R_AIR, actuator_setup
-from pneumaquad.core import layout
-from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
+from pneumaquad.core.actuator import (
+    initial_state,
+    new_outputs,
+    pack_parameter_array,
+    supply_state,
+)
 from pneumaquad.core.kernel import step_actuators
+from pneumaquad.core.layout import ACTUATOR_STATE_DTYPE
 
 DT = 1e-3
+
+
+def _one_actuator(actuator, position, pressure, temperature=None):
+    """Parameters, state and outputs of one actuator at rest (arrays of one record)."""
+    params = pack_parameter_array([actuator])
+    state = np.zeros(1, ACTUATOR_STATE_DTYPE)
+    initial_state(params[0], position, pressure, pressure, temperature, out=state[0])
+    return params, state, new_outputs(1)
 
 
 def test_spool_lag_is_first_order() -> None:
@@ -18,19 +31,16 @@ def test_spool_lag_is_first_order() -> None:
     follows u·(1 - exp(-t/tau)) exactly (the kernel advances it with the exact update)."""
     tau = 0.008
     actuator = actuator_setup("crr-gamma", f'valve.spool_time_constant="{tau} s"')
-    row = pack_parameters(actuator)
-    params = row[np.newaxis, :]
-    state = initial_state(row, 0.02, 2e5, 2e5)[np.newaxis, :]
-    state[0, layout.S_SPOOL] = 0.0
+    params, state, outputs = _one_actuator(actuator, 0.02, 2e5)
+    state[0]["spool_voltage"] = 0.0
     supply = supply_state(actuator)
-    outputs = np.zeros((1, layout.N_OUTPUTS))
     command = np.array([7.25])  # centered +2 V
     spools = []
     for _ in range(30):
         step_actuators(
             params, state, command, np.array([0.02]), np.array([0.0]), DT, 5, supply, outputs
         )
-        spools.append(state[0, layout.S_SPOOL])
+        spools.append(state[0]["spool_voltage"])
     times = DT * np.arange(1, 31)
     assert np.allclose(spools, 2.0 * (1.0 - np.exp(-times / tau)), rtol=1e-12, atol=1e-12)
 
@@ -38,11 +48,9 @@ def test_spool_lag_is_first_order() -> None:
 def test_spool_lag_off_follows_command_at_once() -> None:
     actuator = actuator_setup("crr-gamma")
     assert actuator.valve.spool_time_constant == 0.0
-    row = pack_parameters(actuator)
-    state = initial_state(row, 0.02, 2e5, 2e5)[np.newaxis, :]
-    outputs = np.zeros((1, layout.N_OUTPUTS))
+    params, state, outputs = _one_actuator(actuator, 0.02, 2e5)
     step_actuators(
-        row[np.newaxis, :],
+        params,
         state,
         np.array([3.0]),
         np.array([0.02]),
@@ -52,7 +60,7 @@ def test_spool_lag_off_follows_command_at_once() -> None:
         supply_state(actuator),
         outputs,
     )
-    assert state[0, layout.S_SPOOL] == pytest.approx(3.0 - 5.25)
+    assert state[0]["spool_voltage"] == pytest.approx(3.0 - 5.25)
 
 
 def test_heat_transfer_relaxes_closed_chamber_to_wall_temperature() -> None:
@@ -67,22 +75,20 @@ def test_heat_transfer_relaxes_closed_chamber_to_wall_temperature() -> None:
         'valve.model="simple"',
         'valve.simple.leak_area="0 m^2"',
     )
-    row = pack_parameters(actuator)
     position = 0.02
     hot = 360.0
-    state = initial_state(row, position, 3e5, 3e5, temperature=hot)[np.newaxis, :]
+    params, state, outputs = _one_actuator(actuator, position, 3e5, temperature=hot)
     cylinder = actuator.cylinder
     volume = cylinder.cap_area * (position + cylinder.cap_dead_length)
-    mass = state[0, layout.S_CAP_MASS]
+    mass = state[0]["cap_mass"]
     wall = 0.5 * math.pi * cylinder.bore**2 + math.pi * cylinder.bore * volume / cylinder.cap_area
     k = actuator.gas.heat_capacity_ratio
     tau = mass * R_AIR / ((k - 1.0) * h * wall)
-    outputs = np.zeros((1, layout.N_OUTPUTS))
     offset = np.array([actuator.valve.offset_voltage])  # closed: zero area at the offset
     steps = round(tau / DT)
     for _ in range(steps):
         step_actuators(
-            row[np.newaxis, :],
+            params,
             state,
             offset,
             np.array([position]),
@@ -92,8 +98,8 @@ def test_heat_transfer_relaxes_closed_chamber_to_wall_temperature() -> None:
             supply_state(actuator),
             outputs,
         )
-    assert state[0, layout.S_CAP_MASS] == mass  # nothing flowed
-    temperature = outputs[0, layout.O_CAP_TEMPERATURE]
+    assert state[0]["cap_mass"] == mass  # nothing flowed
+    temperature = outputs[0]["cap_temperature"]
     expected = 298.0 + (hot - 298.0) * math.exp(-steps * DT / tau)
     assert temperature == pytest.approx(expected, rel=2e-3)
     assert 298.0 < temperature < hot

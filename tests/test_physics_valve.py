@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from conftest import PSI, actuator_setup
-from pneumaquad.core import layout
 from pneumaquad.core.actuator import pack_parameters
 from pneumaquad.core.physics.valve import (
     centered_voltage,
@@ -163,7 +162,7 @@ def test_underlapped_connections_follow_cap_port(cap_port: int) -> None:
 def test_simple_connections_switch_supply_and_exhaust() -> None:
     actuator = actuator_setup("crr-gamma", 'valve.model="simple"')
     row = pack_parameters(actuator)
-    ps, pe = row[layout.P_PS], row[layout.P_PE]
+    ps, pe = row["supply_pressure"], row["exhaust_pressure"]
     cap_p, cap_a, rod_p, rod_a = valve_connections(row, 2.0, ps)
     area = 1e-5 * 2.0 / 5.0 + 2e-7
     assert (cap_p, rod_p) == (ps, pe)  # positive: extend (cap to supply), Fig. 18

@@ -22,20 +22,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from pneumaquad.core.layout import (
-    P_CAP_AREA,
-    P_CAP_DEAD,
-    P_CP,
-    P_K,
-    P_PATM,
-    P_R,
-    P_ROD_AREA,
-    P_ROD_DEAD,
-    P_STROKE,
-    S_CAP_PRESSURE,
-    S_POSITION,
-    S_ROD_PRESSURE,
-)
+from pneumaquad.core.layout import float_view
 from pneumaquad.core.physics.chamber import chamber_volume_cap, chamber_volume_rod
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import RobotModel, build_robot
@@ -75,15 +62,15 @@ def _released(gravity: bool, seal_friction: bool) -> RobotSimulation:
 def _compression_exponent(simulation: RobotSimulation) -> np.ndarray:
     """n = k·R/cp + 1 per cylinder (eq 4.1.10, adiabatic)."""
     p = simulation.params
-    return p[:, P_K] * p[:, P_R] / p[:, P_CP] + 1.0
+    return p["heat_capacity_ratio"] * p["gas_constant"] / p["specific_heat_cp"] + 1.0
 
 
 def _volumes(simulation: RobotSimulation) -> tuple[np.ndarray, np.ndarray]:
     p, x = simulation.params, simulation.positions
-    cap = np.array([chamber_volume_cap(x[i], p[i, P_CAP_AREA], p[i, P_CAP_DEAD])
+    cap = np.array([chamber_volume_cap(x[i], p[i]["cap_area"], p[i]["cap_dead_length"])
                     for i in range(len(x))])
-    rod = np.array([chamber_volume_rod(x[i], p[i, P_STROKE], p[i, P_ROD_AREA],
-                                       p[i, P_ROD_DEAD]) for i in range(len(x))])
+    rod = np.array([chamber_volume_rod(x[i], p[i]["stroke"], p[i]["rod_area"],
+                                       p[i]["rod_dead_length"]) for i in range(len(x))])
     return cap, rod
 
 
@@ -96,8 +83,8 @@ def _energies(simulation: RobotSimulation) -> tuple[float, float]:
     p, s = simulation.params, simulation.state
     cap, rod = _volumes(simulation)
     n = _compression_exponent(simulation)
-    gas = (s[:, S_CAP_PRESSURE] * cap + s[:, S_ROD_PRESSURE] * rod) / (n - 1.0)
-    atmosphere = p[:, P_PATM] * (p[:, P_CAP_AREA] - p[:, P_ROD_AREA]) * simulation.positions
+    gas = (s["cap_pressure"] * cap + s["rod_pressure"] * rod) / (n - 1.0)
+    atmosphere = p["atmospheric_pressure"] * (p["cap_area"] - p["rod_area"]) * simulation.positions
     return kinetic, float(np.sum(gas + atmosphere))
 
 
@@ -134,7 +121,7 @@ def test_closed_chambers_keep_p_v_to_the_n_in_the_coupled_robot() -> None:
     def invariants() -> np.ndarray:
         cap, rod = _volumes(simulation)
         s = simulation.state
-        return np.concatenate([s[:, S_CAP_PRESSURE] * cap**n, s[:, S_ROD_PRESSURE] * rod**n])
+        return np.concatenate([s["cap_pressure"] * cap**n, s["rod_pressure"] * rod**n])
 
     start = invariants()
     travel, worst = 0.0, 0.0
@@ -162,7 +149,7 @@ def test_kernel_piston_is_the_linkage_position_of_the_present_joint_angle() -> N
         linkage = np.array([piston_from_angle(simulation.linkage[i], angles[i])
                             for i in range(robot.joint_count)])
         np.testing.assert_allclose(simulation.positions, linkage, rtol=0.0, atol=1e-9)
-        np.testing.assert_allclose(simulation.state[:, S_POSITION], linkage, rtol=0.0,
+        np.testing.assert_allclose(simulation.state["position"], linkage, rtol=0.0,
                                    atol=1e-9)
         moved = max(moved, abs(float(simulation.velocities[5])))
     assert moved > 0.01  # [m/s]: sampled while the piston moves
@@ -181,7 +168,7 @@ def test_chunk_size_does_not_change_the_run(chunk: int) -> None:
         simulation.command_angles(target)
         for _ in range(70 // size):
             simulation.step(size)
-        return np.concatenate([simulation.data.qpos, simulation.state.ravel()])
+        return np.concatenate([simulation.data.qpos, float_view(simulation.state).ravel()])
 
     np.testing.assert_array_equal(run(chunk), run(70))
 
@@ -205,7 +192,7 @@ def test_recording_columns_hold_what_their_names_say() -> None:
     recording = dict(zip(columns, np.array(rows).T, strict=True))
     for i, joint in enumerate(simulation.robot.joint_names):
         linkage = simulation.linkage[i]
-        stroke = simulation.params[i, P_STROKE]
+        stroke = simulation.params[i]["stroke"]
         angle, reference = recording[f"{joint} angle [rad]"], recording[f"{joint} reference [rad]"]
         position = [piston_from_angle(linkage, value) for value in angle]
         wanted = [min(max(piston_from_angle(linkage, value), 0.0), stroke) for value in reference]
@@ -284,7 +271,7 @@ def test_chunk_size_does_not_change_a_run_with_contacts() -> None:
         simulation = _standing_quadruped()
         for _ in range(140 // size):
             simulation.step(size)
-        return np.concatenate([simulation.data.qpos, simulation.state.ravel()])
+        return np.concatenate([simulation.data.qpos, float_view(simulation.state).ravel()])
 
     np.testing.assert_array_equal(run(1), run(140))
     np.testing.assert_array_equal(run(7), run(140))

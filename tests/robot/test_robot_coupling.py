@@ -18,7 +18,6 @@ import math
 import numpy as np
 import pytest
 
-from pneumaquad.core.layout import P_PATM, P_PE, P_PS
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.linkage import moment_arm
@@ -197,9 +196,9 @@ def _vented_joint_motion(joint: str, load_ratio: float, *overrides: str) -> tupl
     """
     sim = _simulation(*overrides)
     sim.model.opt.gravity[:] = 0.0
-    atmosphere = sim.params[:, P_PATM]
-    sim.params[:, P_PS] = atmosphere
-    sim.params[:, P_PE] = atmosphere
+    atmosphere = sim.params["atmospheric_pressure"]
+    sim.params["supply_pressure"] = atmosphere
+    sim.params["exhaust_pressure"] = atmosphere
     sim.set_pose(POSE, chamber_pressure=float(atmosphere[0]))
     sim.release()
     i = sim.robot.joint_names.index(f"front_right_{joint}")

@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 import viser
 
-from pneumaquad.core.layout import P_PATM, P_PS
 from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
@@ -377,14 +376,14 @@ class ConsoleApp:
     # --- pneumatics and control ------------------------------------------------------
     def supply_gauge_pressure(self) -> float:
         """Regulated supply pressure [Pa, gauge] of the cylinders."""
-        params = self.simulation.params
-        return float(params[0, P_PS] - params[0, P_PATM])
+        p = self.simulation.params[0]
+        return float(p["supply_pressure"] - p["atmospheric_pressure"])
 
     def set_supply_pressure(self, gauge_pressure: float) -> None:
         """Set the regulated supply pressure [Pa, gauge] of every cylinder, live."""
         with self.lock:
             params = self.simulation.params
-            params[:, P_PS] = params[:, P_PATM] + gauge_pressure
+            params["supply_pressure"] = params["atmospheric_pressure"] + gauge_pressure
 
     def gain_scale_of(self, joint_type: str) -> float:
         """Operator gain scale of ``joint_type`` (1 = the parameter file's gains)."""

@@ -1,4 +1,7 @@
-"""Object layer over the kernels: packing parameter objects and initial actuator states."""
+"""Object layer over the kernels: packing parameter objects into the named records of
+:mod:`pneumaquad.core.layout`, and initial actuator and supply states."""
+
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -49,132 +52,182 @@ def chamber_ports(valve: ValveParameters) -> tuple[ValvePortParameters, ValvePor
     return valve.port1, valve.port2
 
 
-def pack_parameters(actuator: ActuatorParameters) -> np.ndarray:
-    """Pack one actuator's parameters into a kernel row (SI, see :mod:`pneumaquad.core.layout`).
+def new_parameters(count: int | None = None) -> np.ndarray | np.void:
+    """Zeroed parameter records (:data:`~pneumaquad.core.layout.ACTUATOR_PARAMETERS_DTYPE`):
+    one record, or an array of ``count``."""
+    if count is None:
+        return np.zeros(1, layout.ACTUATOR_PARAMETERS_DTYPE)[0]
+    return np.zeros(count, layout.ACTUATOR_PARAMETERS_DTYPE)
+
+
+def pack_parameters(actuator: ActuatorParameters, out: np.void | None = None) -> np.void:
+    """Pack one actuator's parameters into a kernel record, every field by name (SI).
 
     Parameters
     ----------
     actuator : ActuatorParameters
         Validated parameters.
+    out : numpy.void, optional
+        Record of :data:`~pneumaquad.core.layout.ACTUATOR_PARAMETERS_DTYPE` to fill (an
+        element of a parameter array); a new one by default.
 
     Returns
     -------
-    numpy.ndarray
-        Row of length N_PARAMETERS. Rig-only columns are zero; set them with
+    numpy.void
+        The filled record. The rig fields
+        (:data:`~pneumaquad.core.layout.RIG_PARAMETER_FIELDS`) are zero; set them with
         :func:`pneumaquad.rig.model.pack_rig_parameters`.
     """
     gas, supply, cylinder = actuator.gas, actuator.supply, actuator.cylinder
     valve, friction, thermo = actuator.valve, actuator.friction, actuator.thermodynamics
-    row = np.zeros(layout.N_PARAMETERS)
+    record = new_parameters() if out is None else out
     c1, c2 = orifice_coefficients(gas.heat_capacity_ratio, gas.gas_constant)
-    row[layout.P_K] = gas.heat_capacity_ratio
-    row[layout.P_R] = gas.gas_constant
-    row[layout.P_CP] = gas.specific_heat_cp
-    row[layout.P_TS] = gas.supply_temperature
-    row[layout.P_PATM] = gas.atmospheric_pressure
-    row[layout.P_CRITICAL] = gas.critical_pressure_ratio
-    row[layout.P_C1] = c1
-    row[layout.P_C2] = c2
-    row[layout.P_PS] = supply.supply_pressure
-    row[layout.P_PE] = supply.exhaust_pressure
-    row[layout.P_CAP_AREA] = cylinder.cap_area
-    row[layout.P_ROD_AREA] = cylinder.rod_area
-    row[layout.P_ROD_SECTION] = cylinder.rod_cross_section
-    row[layout.P_STROKE] = cylinder.stroke
-    row[layout.P_CAP_DEAD] = cylinder.cap_dead_length
-    row[layout.P_ROD_DEAD] = cylinder.rod_dead_length
-    row[layout.P_BORE] = cylinder.bore
-    row[layout.P_PISTON_MASS] = cylinder.piston_mass
-    row[layout.P_VALVE_MODEL] = VALVE_CODES[valve.model]
-    row[layout.P_AREA_CURVE] = AREA_CURVE_CODES[valve.area_curve]
-    row[layout.P_INPUT_PRESSURE] = INPUT_PRESSURE_CODES[valve.input_pressure]
-    row[layout.P_FLOW_FORM] = FLOW_CODES[valve.flow_form]
-    row[layout.P_OFFSET] = valve.offset_voltage
-    row[layout.P_UMIN] = valve.min_voltage
-    row[layout.P_UMAX] = valve.max_voltage
-    row[layout.P_SPOOL_TAU] = valve.spool_time_constant
-    row[layout.P_LAMINAR] = valve.laminar_pressure_ratio
+    record["heat_capacity_ratio"] = gas.heat_capacity_ratio
+    record["gas_constant"] = gas.gas_constant
+    record["specific_heat_cp"] = gas.specific_heat_cp
+    record["supply_temperature"] = gas.supply_temperature
+    record["atmospheric_pressure"] = gas.atmospheric_pressure
+    record["critical_pressure_ratio"] = gas.critical_pressure_ratio
+    record["unchoked_flow_constant"] = c1
+    record["choked_flow_constant"] = c2
+    record["supply_pressure"] = supply.supply_pressure
+    record["exhaust_pressure"] = supply.exhaust_pressure
+    record["cap_area"] = cylinder.cap_area
+    record["rod_area"] = cylinder.rod_area
+    record["rod_cross_section"] = cylinder.rod_cross_section
+    record["stroke"] = cylinder.stroke
+    record["cap_dead_length"] = cylinder.cap_dead_length
+    record["rod_dead_length"] = cylinder.rod_dead_length
+    record["bore"] = cylinder.bore
+    record["piston_mass"] = cylinder.piston_mass
+    record["valve_model"] = VALVE_CODES[valve.model]
+    record["flow_form"] = FLOW_CODES[valve.flow_form]
+    record["area_curve"] = AREA_CURVE_CODES[valve.area_curve]
+    record["input_pressure_curve"] = INPUT_PRESSURE_CODES[valve.input_pressure]
+    record["offset_voltage"] = valve.offset_voltage
+    record["min_voltage"] = valve.min_voltage
+    record["max_voltage"] = valve.max_voltage
+    record["spool_time_constant"] = valve.spool_time_constant
+    record["laminar_pressure_ratio"] = valve.laminar_pressure_ratio
     simple = valve.simple
-    row[layout.P_SIMPLE_MAX_AREA] = simple.max_area
-    row[layout.P_SIMPLE_LEAK_AREA] = simple.leak_area
-    row[layout.P_SIMPLE_FULL_SCALE] = simple.full_scale_voltage
-    row[layout.P_CD_CAP] = simple.cap_discharge_coefficient
-    row[layout.P_CD_ROD] = simple.rod_discharge_coefficient
-    row[layout.P_ISO_CONDUCTANCE] = simple.sonic_conductance
-    row[layout.P_ISO_LEAK_CONDUCTANCE] = simple.leak_conductance
-    row[layout.P_ISO_B] = simple.iso_critical_ratio
+    record["simple_max_area"] = simple.max_area
+    record["simple_leak_area"] = simple.leak_area
+    record["simple_full_scale_voltage"] = simple.full_scale_voltage
+    record["cap_discharge_coefficient"] = simple.cap_discharge_coefficient
+    record["rod_discharge_coefficient"] = simple.rod_discharge_coefficient
+    record["sonic_conductance"] = simple.sonic_conductance
+    record["leak_conductance"] = simple.leak_conductance
+    record["iso_critical_ratio"] = simple.iso_critical_ratio
     cap_port, rod_port = chamber_ports(valve)
-    row[layout.P_CAP_POLY_NEG : layout.P_CAP_POLY_NEG + 5] = cap_port.area_negative
-    row[layout.P_CAP_POLY_POS : layout.P_CAP_POLY_POS + 5] = cap_port.area_positive
-    row[layout.P_ROD_POLY_NEG : layout.P_ROD_POLY_NEG + 5] = rod_port.area_negative
-    row[layout.P_ROD_POLY_POS : layout.P_ROD_POLY_POS + 5] = rod_port.area_positive
-    row[layout.P_CAP_HIGH_CUTOFF] = cap_port.high_pressure_cutoff
-    row[layout.P_CAP_LOW_CUTOFF] = cap_port.low_pressure_cutoff
-    row[layout.P_ROD_HIGH_CUTOFF] = rod_port.high_pressure_cutoff
-    row[layout.P_ROD_LOW_CUTOFF] = rod_port.low_pressure_cutoff
-    row[layout.P_FRICTION_MODEL] = FRICTION_CODES[friction.model]
-    row[layout.P_FS] = friction.static_force
-    row[layout.P_FC] = friction.coulomb_force
-    row[layout.P_CV] = friction.viscous_coefficient
-    row[layout.P_VS] = friction.stribeck_velocity
-    row[layout.P_EXPONENT] = friction.stribeck_exponent
-    row[layout.P_KTANH] = friction.tanh_coefficient
-    row[layout.P_DAMPING] = friction.damping_coefficient
-    row[layout.P_SIGMA0] = friction.bristle_stiffness
-    row[layout.P_SIGMA1] = friction.bristle_damping
-    row[layout.P_THERMO_MODEL] = THERMO_CODES[thermo.model]
-    row[layout.P_POLYTROPIC_N] = thermo.polytropic_exponent
-    row[layout.P_HEAT_TRANSFER] = thermo.heat_transfer_coefficient
-    row[layout.P_WALL_TEMPERATURE] = thermo.wall_temperature
-    return row
+    record["cap_polynomial_negative"] = cap_port.area_negative
+    record["cap_polynomial_positive"] = cap_port.area_positive
+    record["rod_polynomial_negative"] = rod_port.area_negative
+    record["rod_polynomial_positive"] = rod_port.area_positive
+    record["cap_high_pressure_cutoff"] = cap_port.high_pressure_cutoff
+    record["cap_low_pressure_cutoff"] = cap_port.low_pressure_cutoff
+    record["rod_high_pressure_cutoff"] = rod_port.high_pressure_cutoff
+    record["rod_low_pressure_cutoff"] = rod_port.low_pressure_cutoff
+    record["friction_model"] = FRICTION_CODES[friction.model]
+    record["static_force"] = friction.static_force
+    record["coulomb_force"] = friction.coulomb_force
+    record["viscous_coefficient"] = friction.viscous_coefficient
+    record["stribeck_velocity"] = friction.stribeck_velocity
+    record["stribeck_exponent"] = friction.stribeck_exponent
+    record["tanh_coefficient"] = friction.tanh_coefficient
+    record["damping_coefficient"] = friction.damping_coefficient
+    record["bristle_stiffness"] = friction.bristle_stiffness
+    record["bristle_damping"] = friction.bristle_damping
+    record["thermo_model"] = THERMO_CODES[thermo.model]
+    record["polytropic_exponent"] = thermo.polytropic_exponent
+    record["heat_transfer_coefficient"] = thermo.heat_transfer_coefficient
+    record["wall_temperature"] = thermo.wall_temperature
+    for field in layout.RIG_PARAMETER_FIELDS:  # not a rig: pack_rig_parameters sets them
+        record[field] = 0
+    return record
+
+
+def pack_parameter_array(actuators: Sequence[ActuatorParameters]) -> np.ndarray:
+    """Parameter records of several actuators, in order: an (N,) array of
+    :data:`~pneumaquad.core.layout.ACTUATOR_PARAMETERS_DTYPE` (see :func:`pack_parameters`)."""
+    params = new_parameters(len(actuators))
+    for index, actuator in enumerate(actuators):
+        pack_parameters(actuator, params[index])
+    return params
 
 
 def initial_state(
-    row: np.ndarray,
+    p: np.void,
     position: float,
     cap_pressure: float,
     rod_pressure: float,
     temperature: float | None = None,
-) -> np.ndarray:
+    out: np.void | None = None,
+) -> np.void:
     """Kernel state for an actuator at rest with given chamber pressures.
 
     Parameters
     ----------
-    row : numpy.ndarray
-        Packed parameters of the actuator.
+    p : numpy.void
+        Packed parameters of the actuator (:func:`pack_parameters`).
     position : float
         Piston extension [m].
     cap_pressure, rod_pressure : float
         Absolute chamber pressures [Pa].
     temperature : float, optional
         Gas temperature [K]; the supply temperature by default.
+    out : numpy.void, optional
+        Record of :data:`~pneumaquad.core.layout.ACTUATOR_STATE_DTYPE` to fill (an element
+        of a state array); a new one by default.
 
     Returns
     -------
-    numpy.ndarray
-        State row of length N_STATES with masses from the ideal gas law (eq 4.1.7).
+    numpy.void
+        State record with masses from the ideal gas law (eq 4.1.7), at rest (zero
+        velocity, spool at the centre, no bristle deflection, no air consumed yet).
     """
-    gas_temperature = row[layout.P_TS] if temperature is None else temperature
-    state = np.zeros(layout.N_STATES)
-    cap_volume = chamber_volume_cap(position, row[layout.P_CAP_AREA], row[layout.P_CAP_DEAD])
+    gas_temperature = p["supply_temperature"] if temperature is None else temperature
+    state = np.zeros(1, layout.ACTUATOR_STATE_DTYPE)[0] if out is None else out
+    cap_volume = chamber_volume_cap(position, p["cap_area"], p["cap_dead_length"])
     rod_volume = chamber_volume_rod(
-        position, row[layout.P_STROKE], row[layout.P_ROD_AREA], row[layout.P_ROD_DEAD]
+        position, p["stroke"], p["rod_area"], p["rod_dead_length"]
     )
-    state[layout.S_CAP_PRESSURE] = cap_pressure
-    state[layout.S_ROD_PRESSURE] = rod_pressure
-    state[layout.S_CAP_MASS] = cap_pressure * cap_volume / (row[layout.P_R] * gas_temperature)
-    state[layout.S_ROD_MASS] = rod_pressure * rod_volume / (row[layout.P_R] * gas_temperature)
-    state[layout.S_POSITION] = position
+    gas_constant = p["gas_constant"]
+    state["cap_pressure"] = cap_pressure
+    state["rod_pressure"] = rod_pressure
+    state["cap_mass"] = cap_pressure * cap_volume / (gas_constant * gas_temperature)
+    state["rod_mass"] = rod_pressure * rod_volume / (gas_constant * gas_temperature)
+    state["spool_voltage"] = 0.0
+    state["bristle_deflection"] = 0.0
+    state["air_consumed"] = 0.0
+    state["position"] = position
+    state["velocity"] = 0.0
     return state
 
 
-def supply_state(actuator: ActuatorParameters) -> np.ndarray:
-    """Shared supply state for the kernels: ideal, or a tank at its initial pressure."""
-    supply = np.zeros(layout.N_SUPPLY)
-    supply[layout.SUPPLY_GAS_CONSTANT] = actuator.gas.gas_constant
+def new_outputs(count: int) -> np.ndarray:
+    """Zeroed kernel outputs of ``count`` actuators
+    (:data:`~pneumaquad.core.layout.ACTUATOR_OUTPUT_DTYPE`)."""
+    return np.zeros(count, layout.ACTUATOR_OUTPUT_DTYPE)
+
+
+def supply_state(actuator: ActuatorParameters, out: np.ndarray | None = None) -> np.ndarray:
+    """Shared supply state for the kernels: ideal, or a tank at its initial pressure.
+
+    Returns an array of one :data:`~pneumaquad.core.layout.SUPPLY_DTYPE` record (``out``,
+    filled, when given). An ideal supply has zero tank fields; nothing is drawn yet.
+    """
+    supply = np.zeros(1, layout.SUPPLY_DTYPE) if out is None else out
+    record = supply[0]
+    record["gas_constant"] = actuator.gas.gas_constant
+    record["drawn_mass"] = 0.0
     if actuator.supply.model == "tank":
-        supply[layout.SUPPLY_MODEL] = 1.0
-        supply[layout.SUPPLY_TANK_PRESSURE] = actuator.supply.tank_initial_pressure
-        supply[layout.SUPPLY_TANK_VOLUME] = actuator.supply.tank_volume
-        supply[layout.SUPPLY_TANK_TEMPERATURE] = actuator.supply.tank_temperature
+        record["model"] = layout.SUPPLY_TANK
+        record["tank_pressure"] = actuator.supply.tank_initial_pressure
+        record["tank_volume"] = actuator.supply.tank_volume
+        record["tank_temperature"] = actuator.supply.tank_temperature
+    else:
+        record["model"] = layout.SUPPLY_IDEAL
+        record["tank_pressure"] = 0.0
+        record["tank_volume"] = 0.0
+        record["tank_temperature"] = 0.0
     return supply

@@ -12,46 +12,13 @@ Both integrate the chamber pressures and masses with Heun's method (explicit RK2
 exact exponential updates. In the rig, the piston velocity is advanced linearly implicitly
 (friction slope and end-stop stiffness on the left-hand side), so the stiff friction laws
 near zero velocity stay stable, and the Coulomb models get an exact stick/slip step.
+
+Actuators are arrays of named records (:mod:`pneumaquad.core.layout`); each loop takes
+an actuator's records once (``p = params[i]``) and hands them to the per-actuator
+functions of :mod:`pneumaquad.core.pneumatics`.
 """
 
-import numpy as np
-
 from pneumaquad.core.jit import compiled
-from pneumaquad.core.layout import (
-    O_END_STOP_FORCE,
-    O_FRICTION_FORCE,
-    O_PNEUMATIC_FORCE,
-    P_CAP_AREA,
-    P_CV,
-    P_EXPONENT,
-    P_FC,
-    P_FRICTION_MODEL,
-    P_FS,
-    P_GRAVITY_FORCE,
-    P_MOVING_MASS,
-    P_OFFSET,
-    P_PATM,
-    P_ROD_AREA,
-    P_ROD_SECTION,
-    P_SIGMA0,
-    P_SPACER,
-    P_SPOOL_TAU,
-    P_STOP_DAMPING,
-    P_STOP_STIFFNESS,
-    P_STROKE,
-    P_UMAX,
-    P_UMIN,
-    P_VS,
-    S_AIR_CONSUMED,
-    S_BRISTLE,
-    S_CAP_MASS,
-    S_CAP_PRESSURE,
-    S_POSITION,
-    S_ROD_MASS,
-    S_ROD_PRESSURE,
-    S_SPOOL,
-    S_VELOCITY,
-)
 from pneumaquad.core.physics.force import end_stop_force, piston_force
 from pneumaquad.core.physics.friction import (
     FRICTION_COULOMB,
@@ -59,9 +26,7 @@ from pneumaquad.core.physics.friction import (
     FRICTION_LUGRE,
     stribeck_curve,
 )
-from pneumaquad.core.physics.valve import (
-    centered_voltage,
-)
+from pneumaquad.core.physics.valve import centered_voltage
 from pneumaquad.core.pneumatics import (
     advance_bristle,
     begin_control_step,
@@ -84,11 +49,11 @@ def step_actuators(
 
     Parameters
     ----------
-    params : ndarray (N, N_PARAMETERS)
+    params : ndarray (N,) of ACTUATOR_PARAMETERS_DTYPE
         Packed parameters (:func:`pneumaquad.core.actuator.pack_parameters`).
-    state : ndarray (N, N_STATES)
-        Chamber states, updated in place. S_POSITION and S_VELOCITY are overwritten with
-        the inputs advanced over the step.
+    state : ndarray (N,) of ACTUATOR_STATE_DTYPE
+        Chamber states, updated in place. The fields ``position`` and ``velocity`` are
+        overwritten with the inputs advanced over the step.
     commands : ndarray (N,)
         Valve voltages held over the step [V].
     positions, velocities : ndarray (N,)
@@ -98,21 +63,22 @@ def step_actuators(
         Step length [s].
     substeps : int
         Heun substeps per control step.
-    supply : ndarray (N_SUPPLY,)
+    supply : ndarray (1,) of SUPPLY_DTYPE
         Shared supply state (ideal or tank), updated in place once per step.
-    outputs : ndarray (N, N_OUTPUTS)
+    outputs : ndarray (N,) of ACTUATOR_OUTPUT_DTYPE
         Filled with mean flows, end-of-step forces (pneumatic and friction, the latter at
         the given velocity) and temperatures.
     """
     count = params.shape[0]
     h = control_step / substeps
     total_drawn = 0.0
+    shared = supply[0]
     for index in range(count):
         p = params[index]
         s = state[index]
         out = outputs[index]
         target, lagging, supply_pressure, connections = begin_control_step(
-            p, s, out, commands[index], supply
+            p, s, out, commands[index], shared
         )
         position = positions[index]
         velocity = velocities[index]
@@ -122,12 +88,12 @@ def step_actuators(
             )
             total_drawn += heun_pneumatics(p, s, position, velocity, h, connections, out)
             position += h * velocity
-        s[S_BRISTLE] = advance_bristle(p, s[S_BRISTLE], velocity, control_step)
-        s[S_POSITION] = position
-        s[S_VELOCITY] = velocity
+        s.bristle_deflection = advance_bristle(p, s.bristle_deflection, velocity, control_step)
+        s.position = position
+        s.velocity = velocity
         finish_outputs(p, s, position, control_step, out)
-        out[O_FRICTION_FORCE] = friction_of(p, velocity, s[S_BRISTLE])
-    draw_from_tank(supply, total_drawn)
+        out.friction_force = friction_of(p, velocity, s.bristle_deflection)
+    draw_from_tank(shared, total_drawn)
 
 
 @compiled
@@ -141,22 +107,22 @@ def rig_mechanics_substep(p, s, time_step, out):
     Coulomb-viscous model of eq 4.2.4, Fc otherwise), the piston stops.
     """
     h = time_step
-    x = s[S_POSITION]
-    v = s[S_VELOCITY]
-    mass = p[P_MOVING_MASS]
+    x = s.position
+    v = s.velocity
+    mass = p.moving_mass
     force = (
         piston_force(
-            s[S_CAP_PRESSURE],
-            s[S_ROD_PRESSURE],
-            p[P_PATM],
-            p[P_CAP_AREA],
-            p[P_ROD_AREA],
-            p[P_ROD_SECTION],
+            s.cap_pressure,
+            s.rod_pressure,
+            p.atmospheric_pressure,
+            p.cap_area,
+            p.rod_area,
+            p.rod_cross_section,
         )
-        + p[P_GRAVITY_FORCE]
+        + p.gravity_force
     )
-    stop = end_stop_force(x, v, p[P_STROKE], p[P_STOP_STIFFNESS], p[P_STOP_DAMPING])
-    model = int(p[P_FRICTION_MODEL])
+    stop = end_stop_force(x, v, p.stroke, p.end_stop_stiffness, p.end_stop_damping)
+    model = p.friction_model
     dry_model = model in (FRICTION_COULOMB, FRICTION_COULOMB_VISCOUS)
     resting_on_stop = dry_model and v == 0.0 and stop != 0.0
     if resting_on_stop:
@@ -165,29 +131,32 @@ def rig_mechanics_substep(p, s, time_step, out):
         # penetration is dropped and friction alone holds the piston (breakaway at Fs).
         stop = max(0.0, -force) if stop > 0.0 else min(0.0, -force)
         if stop == 0.0:
-            x = min(max(x, 0.0), p[P_STROKE])
+            x = min(max(x, 0.0), p.stroke)
     stiffness = 0.0
     stop_damping = 0.0
     if stop != 0.0 and not resting_on_stop:
-        stiffness = p[P_STOP_STIFFNESS]
-        stop_damping = p[P_STOP_DAMPING]
-    damping = friction_slope_of(p, v, s[S_BRISTLE])
+        stiffness = p.end_stop_stiffness
+        stop_damping = p.end_stop_damping
+    damping = friction_slope_of(p, v, s.bristle_deflection)
     effective_mass = mass + h * (damping + stop_damping) + h * h * stiffness
     if dry_model:
-        viscous = p[P_CV] if model == FRICTION_COULOMB_VISCOUS else 0.0
+        viscous = p.viscous_coefficient if model == FRICTION_COULOMB_VISCOUS else 0.0
         free = v + h * (force + stop - viscous * v - h * stiffness * v) / effective_mass
         needed = effective_mass * free / h
-        breakaway = p[P_FS] if (v == 0.0 and model == FRICTION_COULOMB_VISCOUS) else p[P_FC]
+        breakaway = (
+            p.static_force if (v == 0.0 and model == FRICTION_COULOMB_VISCOUS)
+            else p.coulomb_force
+        )
         if abs(needed) <= breakaway:
             v_new = 0.0
             dry = needed
         else:
-            dry = p[P_FC] if free > 0.0 else -p[P_FC]
+            dry = p.coulomb_force if free > 0.0 else -p.coulomb_force
             v_new = free - h * dry / effective_mass
         friction = dry + viscous * v_new
     else:
-        s[S_BRISTLE] = advance_bristle(p, s[S_BRISTLE], v, h)
-        friction = friction_of(p, v, s[S_BRISTLE])
+        s.bristle_deflection = advance_bristle(p, s.bristle_deflection, v, h)
+        friction = friction_of(p, v, s.bristle_deflection)
         v_new = v + h * (force + stop - friction - h * stiffness * v) / effective_mass
         if model != FRICTION_LUGRE and v_new * v < 0.0:
             # The friction force, taken at the old velocity, overshot through zero. A law
@@ -198,10 +167,10 @@ def rig_mechanics_substep(p, s, time_step, out):
             if secant > damping:
                 effective_mass += h * (secant - damping)
                 v_new = v + h * (force + stop - friction - h * stiffness * v) / effective_mass
-    s[S_VELOCITY] = v_new
-    s[S_POSITION] = x + h * v_new
-    out[O_FRICTION_FORCE] = friction
-    out[O_END_STOP_FORCE] = stop
+    s.velocity = v_new
+    s.position = x + h * v_new
+    out.friction_force = friction
+    out.end_stop_force = stop
 
 
 @compiled
@@ -209,7 +178,7 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
     """Advance N single-DoF rigs (cylinder + load) by one control step.
 
     Parameters as in :func:`step_actuators`, without external positions: each rig's
-    S_POSITION and S_VELOCITY are its own states. Per substep the chamber states take a
+    ``position`` and ``velocity`` are its own states. Per substep the chamber states take a
     Heun step with the piston moving at its current velocity, then the piston takes a
     linearly implicit step with the new pressures (:func:`rig_mechanics_substep`). In
     spacer mode the piston stays at full extension and the end-stop force is the load
@@ -218,58 +187,67 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
     count = params.shape[0]
     h = control_step / substeps
     total_drawn = 0.0
+    shared = supply[0]
     for index in range(count):
         p = params[index]
         s = state[index]
         out = outputs[index]
         target, lagging, supply_pressure, connections = begin_control_step(
-            p, s, out, commands[index], supply
+            p, s, out, commands[index], shared
         )
-        spacer = p[P_SPACER] == 1.0
+        spacer = p.spacer != 0
         for _ in range(substeps):
             connections = substep_connections(
                 p, s, target, lagging, supply_pressure, connections, h
             )
-            total_drawn += heun_pneumatics(p, s, s[S_POSITION], s[S_VELOCITY], h, connections, out)
+            total_drawn += heun_pneumatics(p, s, s.position, s.velocity, h, connections, out)
             if not spacer:
                 rig_mechanics_substep(p, s, h, out)
-        finish_outputs(p, s, s[S_POSITION], control_step, out)
+        finish_outputs(p, s, s.position, control_step, out)
         if spacer:
-            s[S_POSITION] = p[P_STROKE]
-            s[S_VELOCITY] = 0.0
-            out[O_FRICTION_FORCE] = 0.0
-            out[O_END_STOP_FORCE] = -(out[O_PNEUMATIC_FORCE] + p[P_GRAVITY_FORCE])
-    draw_from_tank(supply, total_drawn)
+            s.position = p.stroke
+            s.velocity = 0.0
+            out.friction_force = 0.0
+            out.end_stop_force = -(out.pneumatic_force + p.gravity_force)
+    draw_from_tank(shared, total_drawn)
 
 
 @compiled
-def rig_rates(p, y, command, supply_pressure):
+def rig_rates(params, state, command, supply_pressure, rates):
     """Right-hand side of the rig ODE for the adaptive reference solver.
 
-    State y follows the S_* layout (9 entries). Uses the same physics functions as the
-    fixed-step kernels. The spool lag (if any) is a state; without it the spool follows
-    the command instantly.
+    ``params``, ``state`` and ``rates`` are arrays of one record: the rig's parameters
+    (ACTUATOR_PARAMETERS_DTYPE), its state and, filled here, the time derivative of each
+    state field (both ACTUATOR_STATE_DTYPE: [Pa/s], [kg/s], [V/s], [m/s], [m/s^2]) at a
+    valve command [V] and supply pressure [Pa]. (Arrays rather than records, because
+    the solver calls this from Python many times per control step and numba dispatches
+    arrays of records faster than single records.) Uses the same physics functions as
+    the fixed-step kernels. The spool lag (if any) is a state; without it the spool
+    follows the command instantly.
     """
-    rates = np.zeros(y.shape[0])
-    target = centered_voltage(command, p[P_OFFSET], p[P_UMIN], p[P_UMAX])
+    p = params[0]
+    y = state[0]
+    r = rates[0]
+    target = centered_voltage(command, p.offset_voltage, p.min_voltage, p.max_voltage)
     spool = target
-    if p[P_SPOOL_TAU] > 0.0:
-        spool = y[S_SPOOL]
-        rates[S_SPOOL] = (target - spool) / p[P_SPOOL_TAU]
+    r.spool_voltage = 0.0
+    if p.spool_time_constant > 0.0:
+        spool = y.spool_voltage
+        r.spool_voltage = (target - spool) / p.spool_time_constant
     cap_source, cap_conductance, rod_source, rod_conductance = valve_connections(
         p, spool, supply_pressure
     )
-    x = y[S_POSITION]
-    v = y[S_VELOCITY]
-    spacer = p[P_SPACER] == 1.0
+    x = y.position
+    v = y.velocity
+    spacer = p.spacer != 0
     if spacer:
         v = 0.0
     dpc, dpr, fc, fr, draw = pneumatic_rates(
         p,
-        y[S_CAP_PRESSURE],
-        y[S_ROD_PRESSURE],
-        max(y[S_CAP_MASS], 1e-12),
-        max(y[S_ROD_MASS], 1e-12),
+        y.cap_pressure,
+        y.rod_pressure,
+        max(y.cap_mass, 1e-12),
+        max(y.rod_mass, 1e-12),
         x,
         v,
         cap_source,
@@ -277,30 +255,33 @@ def rig_rates(p, y, command, supply_pressure):
         rod_source,
         rod_conductance,
     )
-    rates[S_CAP_PRESSURE] = dpc
-    rates[S_ROD_PRESSURE] = dpr
-    rates[S_CAP_MASS] = fc
-    rates[S_ROD_MASS] = fr
-    rates[S_AIR_CONSUMED] = draw
+    r.cap_pressure = dpc
+    r.rod_pressure = dpr
+    r.cap_mass = fc
+    r.rod_mass = fr
+    r.air_consumed = draw
+    r.bristle_deflection = 0.0
+    r.position = 0.0
+    r.velocity = 0.0
     if spacer:
-        return rates
-    model = int(p[P_FRICTION_MODEL])
-    if model == FRICTION_LUGRE:
-        g = stribeck_curve(v, p[P_FS], p[P_FC], p[P_VS], p[P_EXPONENT])
-        rates[S_BRISTLE] = v - p[P_SIGMA0] * abs(v) * y[S_BRISTLE] / g
+        return
+    if p.friction_model == FRICTION_LUGRE:
+        g = stribeck_curve(
+            v, p.static_force, p.coulomb_force, p.stribeck_velocity, p.stribeck_exponent
+        )
+        r.bristle_deflection = v - p.bristle_stiffness * abs(v) * y.bristle_deflection / g
     force = (
         piston_force(
-            y[S_CAP_PRESSURE],
-            y[S_ROD_PRESSURE],
-            p[P_PATM],
-            p[P_CAP_AREA],
-            p[P_ROD_AREA],
-            p[P_ROD_SECTION],
+            y.cap_pressure,
+            y.rod_pressure,
+            p.atmospheric_pressure,
+            p.cap_area,
+            p.rod_area,
+            p.rod_cross_section,
         )
-        + p[P_GRAVITY_FORCE]
+        + p.gravity_force
     )
-    stop = end_stop_force(x, v, p[P_STROKE], p[P_STOP_STIFFNESS], p[P_STOP_DAMPING])
-    friction = friction_of(p, v, y[S_BRISTLE])
-    rates[S_POSITION] = v
-    rates[S_VELOCITY] = (force + stop - friction) / p[P_MOVING_MASS]
-    return rates
+    stop = end_stop_force(x, v, p.stroke, p.end_stop_stiffness, p.end_stop_damping)
+    friction = friction_of(p, v, y.bristle_deflection)
+    r.position = v
+    r.velocity = (force + stop - friction) / p.moving_mass

@@ -1,113 +1,187 @@
-"""Column layout of the packed parameter, state and output arrays of the compiled kernels.
+"""Named records of the compiled kernels: actuator parameters, state, outputs, supply.
 
-The kernels take one float64 row per actuator. Index constants are module globals, which
-numba folds into the compiled code as literals.
+Each actuator is one record of a NumPy structured dtype; N actuators are an array of
+them. The compiled code reads fields by name (``p.cap_area``, ``state[i].cap_pressure``),
+which numba lowers to fixed offsets, as fast as indexing a float row. Enumerations are
+integer fields compared with the named constants below; the valve's polynomial
+coefficients are sub-arrays of five values, highest power first. Units are SI.
+
+Packing from the validated parameter objects is :mod:`pneumaquad.core.actuator` (and
+:mod:`pneumaquad.rig.model` for the rig fields). :func:`float_view` is the one conversion
+to plain floats, for code that needs a float vector (the adaptive solver's state).
 """
 
-# --- parameters ------------------------------------------------------------------------
-P_K = 0  # heat capacity ratio [-]
-P_R = 1  # gas constant [J/(kg K)]
-P_CP = 2  # specific heat cp [J/(kg K)]
-P_TS = 3  # supply temperature [K]
-P_PATM = 4  # atmospheric pressure [Pa]
-P_CRITICAL = 5  # critical pressure ratio [-]
-P_C1 = 6  # unchoked flow constant (eq 4.1.8)
-P_C2 = 7  # choked flow constant (eq 4.1.9)
-P_PS = 8  # regulated supply pressure [Pa]
-P_PE = 9  # exhaust pressure [Pa]
-P_CAP_AREA = 10  # [m^2]
-P_ROD_AREA = 11  # [m^2]
-P_ROD_SECTION = 12  # [m^2]
-P_STROKE = 13  # [m]
-P_CAP_DEAD = 14  # [m]
-P_ROD_DEAD = 15  # [m]
-P_BORE = 16  # [m]
-P_VALVE_MODEL = 17  # VALVE_SIMPLE / VALVE_UNDERLAPPED
-P_FLOW_FORM = 18  # FLOW_ORIFICE / FLOW_ISO6358
-P_OFFSET = 19  # [V]
-P_UMIN = 20  # [V]
-P_UMAX = 21  # [V]
-P_SPOOL_TAU = 22  # [s], 0 = no lag
-P_LAMINAR = 23  # [-]
-P_SIMPLE_MAX_AREA = 24  # [m^2]
-P_SIMPLE_LEAK_AREA = 25  # [m^2]
-P_SIMPLE_FULL_SCALE = 26  # [V]
-P_CD_CAP = 27  # [-]
-P_CD_ROD = 28  # [-]
-P_ISO_CONDUCTANCE = 29  # [m^3/(s Pa)]
-P_ISO_LEAK_CONDUCTANCE = 30  # [m^3/(s Pa)]
-P_ISO_B = 31  # [-]
-P_CAP_POLY_NEG = 32  # 5 coefficients [m^2/V^n], highest power first
-P_CAP_POLY_POS = 37
-P_ROD_POLY_NEG = 42
-P_ROD_POLY_POS = 47
-P_CAP_HIGH_CUTOFF = 52  # [V]
-P_CAP_LOW_CUTOFF = 53
-P_ROD_HIGH_CUTOFF = 54
-P_ROD_LOW_CUTOFF = 55
-P_FRICTION_MODEL = 56
-P_FS = 57  # [N]
-P_FC = 58  # [N]
-P_CV = 59  # [N s/m]
-P_VS = 60  # [m/s]
-P_EXPONENT = 61  # [-]
-P_KTANH = 62  # [s/m]
-P_DAMPING = 63  # [N s/m]
-P_SIGMA0 = 64  # [N/m]
-P_SIGMA1 = 65  # [N s/m]
-P_THERMO_MODEL = 66
-P_POLYTROPIC_N = 67  # [-]
-P_HEAT_TRANSFER = 68  # [W/(m^2 K)]
-P_WALL_TEMPERATURE = 69  # [K]
-P_PISTON_MASS = 70  # [kg]
-# single-DoF rig (ignored by the externally driven kernel)
-P_MOVING_MASS = 71  # load + piston [kg]
-P_GRAVITY_FORCE = 72  # weight along +x [N]
-P_STOP_STIFFNESS = 73  # [N/m]
-P_STOP_DAMPING = 74  # [N s/m]
-P_SPACER = 75  # 1.0 = piston fixed at full extension
-# underlapped valve sub-models (thesis 5.5.3 Table 3: the valve's two parts separately)
-P_AREA_CURVE = 76  # AREA_POLYNOMIAL / AREA_LINEAR
-P_INPUT_PRESSURE = 77  # INPUT_TANH / INPUT_SWITCHED
-N_PARAMETERS = 78
+import numpy as np
+from numpy.lib.recfunctions import structured_to_unstructured
 
-VALVE_SIMPLE = 0
-VALVE_UNDERLAPPED = 1
-FLOW_ORIFICE = 0
-FLOW_ISO6358 = 1
-AREA_POLYNOMIAL = 0
-AREA_LINEAR = 1
-INPUT_TANH = 0
-INPUT_SWITCHED = 1
+__all__ = [
+    "ACTUATOR_OUTPUT_DTYPE",
+    "ACTUATOR_PARAMETERS_DTYPE",
+    "ACTUATOR_STATE_DTYPE",
+    "AREA_LINEAR",
+    "AREA_POLYNOMIAL",
+    "FLOW_ISO6358",
+    "FLOW_ORIFICE",
+    "INPUT_SWITCHED",
+    "INPUT_TANH",
+    "POLYNOMIAL_COEFFICIENTS",
+    "RIG_PARAMETER_FIELDS",
+    "SUPPLY_DTYPE",
+    "SUPPLY_IDEAL",
+    "SUPPLY_TANK",
+    "VALVE_SIMPLE",
+    "VALVE_UNDERLAPPED",
+    "float_view",
+    "state_field_index",
+]
 
-# --- state -----------------------------------------------------------------------------
-S_CAP_PRESSURE = 0  # [Pa]
-S_ROD_PRESSURE = 1  # [Pa]
-S_CAP_MASS = 2  # [kg]
-S_ROD_MASS = 3  # [kg]
-S_SPOOL = 4  # effective centered voltage after the spool lag [V]
-S_BRISTLE = 5  # LuGre bristle deflection [m]
-S_AIR_CONSUMED = 6  # mass drawn from the supply since the start [kg]
-S_POSITION = 7  # piston extension [m] (rig only; the robot kernel gets it as input)
-S_VELOCITY = 8  # [m/s]
-N_STATES = 9
+#: Coefficients of each equivalent-area polynomial (4th order).
+POLYNOMIAL_COEFFICIENTS = 5
 
-# --- per-step outputs ------------------------------------------------------------------
-O_CAP_FLOW = 0  # mean net mass flow into the cap chamber over the step [kg/s]
-O_ROD_FLOW = 1  # mean net mass flow into the rod chamber over the step [kg/s]
-O_PNEUMATIC_FORCE = 2  # eq 4.1.11 without friction, end of step [N]
-O_FRICTION_FORCE = 3  # [N]
-O_END_STOP_FORCE = 4  # [N]
-O_CAP_TEMPERATURE = 5  # [K]
-O_ROD_TEMPERATURE = 6  # [K]
-O_SUPPLY_DRAW = 7  # mean mass flow drawn from the supply [kg/s]
-N_OUTPUTS = 8
+# --- enumerations (integer fields) -----------------------------------------------------
+VALVE_SIMPLE = 0  # valve_model: linear slot area, fixed supply/exhaust pressures
+VALVE_UNDERLAPPED = 1  # valve_model: the thesis's fitted underlapped valve
+FLOW_ORIFICE = 0  # flow_form: compressible orifice flow (eq 4.1.8, 4.1.9)
+FLOW_ISO6358 = 1  # flow_form: ISO 6358 sonic conductance C and critical ratio b
+AREA_POLYNOMIAL = 0  # area_curve: fitted polynomials (thesis 4.2.3)
+AREA_LINEAR = 1  # area_curve: the simple valve's linear slot area
+INPUT_TANH = 0  # input_pressure_curve: tanh input pressures (eq 4.2.7)
+INPUT_SWITCHED = 1  # input_pressure_curve: plain supply/exhaust switching
+SUPPLY_IDEAL = 0  # supply model: regulated, unlimited
+SUPPLY_TANK = 1  # supply model: finite isothermal tank behind the regulator
 
-# --- shared supply ---------------------------------------------------------------------
-SUPPLY_MODEL = 0  # 0 ideal, 1 tank
-SUPPLY_TANK_PRESSURE = 1  # [Pa]
-SUPPLY_TANK_VOLUME = 2  # [m^3]
-SUPPLY_TANK_TEMPERATURE = 3  # [K]
-SUPPLY_DRAWN_MASS = 4  # total mass drawn from the supply [kg]
-SUPPLY_GAS_CONSTANT = 5  # R of the stored gas [J/(kg K)]
-N_SUPPLY = 6
+#: Parameters of one actuator (valve + cylinder + friction + chambers), plus the fields of
+#: the single-DoF rig that :func:`pneumaquad.core.kernel.step_rigs` reads.
+ACTUATOR_PARAMETERS_DTYPE = np.dtype([
+    # gas
+    ("heat_capacity_ratio", "f8"),  # k [-]
+    ("gas_constant", "f8"),  # R [J/(kg K)]
+    ("specific_heat_cp", "f8"),  # cp [J/(kg K)]
+    ("supply_temperature", "f8"),  # Ts [K]
+    ("atmospheric_pressure", "f8"),  # [Pa]
+    ("critical_pressure_ratio", "f8"),  # [-]
+    ("unchoked_flow_constant", "f8"),  # C1 of eq 4.1.8 [sqrt(kg K/J)]
+    ("choked_flow_constant", "f8"),  # C2 of eq 4.1.9 [sqrt(kg K/J)]
+    # supply
+    ("supply_pressure", "f8"),  # regulated supply pressure [Pa]
+    ("exhaust_pressure", "f8"),  # [Pa]
+    # cylinder
+    ("cap_area", "f8"),  # piston area on the cap side [m^2]
+    ("rod_area", "f8"),  # annulus area on the rod side [m^2]
+    ("rod_cross_section", "f8"),  # rod section under atmospheric pressure [m^2]
+    ("stroke", "f8"),  # [m]
+    ("cap_dead_length", "f8"),  # cap dead volume / cap area [m]
+    ("rod_dead_length", "f8"),  # rod dead volume / rod area [m]
+    ("bore", "f8"),  # [m]
+    ("piston_mass", "f8"),  # piston and rod [kg]
+    # valve
+    ("valve_model", "i8"),  # VALVE_SIMPLE / VALVE_UNDERLAPPED
+    ("flow_form", "i8"),  # FLOW_ORIFICE / FLOW_ISO6358
+    ("area_curve", "i8"),  # AREA_POLYNOMIAL / AREA_LINEAR (underlapped valve)
+    ("input_pressure_curve", "i8"),  # INPUT_TANH / INPUT_SWITCHED (underlapped valve)
+    ("offset_voltage", "f8"),  # valve centre [V]
+    ("min_voltage", "f8"),  # [V]
+    ("max_voltage", "f8"),  # [V]
+    ("spool_time_constant", "f8"),  # first-order spool lag [s], 0 = none
+    ("laminar_pressure_ratio", "f8"),  # [-]
+    # simple valve (and the linear area curve of the underlapped one)
+    ("simple_max_area", "f8"),  # [m^2]
+    ("simple_leak_area", "f8"),  # [m^2]
+    ("simple_full_scale_voltage", "f8"),  # [V]
+    ("cap_discharge_coefficient", "f8"),  # [-]
+    ("rod_discharge_coefficient", "f8"),  # [-]
+    ("sonic_conductance", "f8"),  # ISO 6358 C [m^3/(s Pa)]
+    ("leak_conductance", "f8"),  # [m^3/(s Pa)]
+    ("iso_critical_ratio", "f8"),  # ISO 6358 b [-]
+    # underlapped valve: the ports feeding the cap and rod chambers
+    ("cap_polynomial_negative", "f8", POLYNOMIAL_COEFFICIENTS),  # [m^2/V^n]
+    ("cap_polynomial_positive", "f8", POLYNOMIAL_COEFFICIENTS),  # [m^2/V^n]
+    ("rod_polynomial_negative", "f8", POLYNOMIAL_COEFFICIENTS),  # [m^2/V^n]
+    ("rod_polynomial_positive", "f8", POLYNOMIAL_COEFFICIENTS),  # [m^2/V^n]
+    ("cap_high_pressure_cutoff", "f8"),  # eq 4.2.7 [V]
+    ("cap_low_pressure_cutoff", "f8"),  # [V]
+    ("rod_high_pressure_cutoff", "f8"),  # [V]
+    ("rod_low_pressure_cutoff", "f8"),  # [V]
+    # friction (FRICTION_* of pneumaquad.core.physics.friction)
+    ("friction_model", "i8"),
+    ("static_force", "f8"),  # Fs [N]
+    ("coulomb_force", "f8"),  # Fc [N]
+    ("viscous_coefficient", "f8"),  # Cv [N s/m]
+    ("stribeck_velocity", "f8"),  # vS [m/s]
+    ("stribeck_exponent", "f8"),  # [-]
+    ("tanh_coefficient", "f8"),  # [s/m]
+    ("damping_coefficient", "f8"),  # viscous model [N s/m]
+    ("bristle_stiffness", "f8"),  # LuGre sigma0 [N/m]
+    ("bristle_damping", "f8"),  # LuGre sigma1 [N s/m]
+    # chamber thermodynamics (THERMO_* of pneumaquad.core.physics.chamber)
+    ("thermo_model", "i8"),
+    ("polytropic_exponent", "f8"),  # [-]
+    ("heat_transfer_coefficient", "f8"),  # [W/(m^2 K)]
+    ("wall_temperature", "f8"),  # [K]
+    # single-DoF rig (pneumaquad.rig.model; the externally driven kernel ignores these)
+    ("moving_mass", "f8"),  # load + piston [kg]
+    ("gravity_force", "f8"),  # weight along +x [N]
+    ("end_stop_stiffness", "f8"),  # [N/m]
+    ("end_stop_damping", "f8"),  # [N s/m]
+    ("spacer", "i8"),  # 1: piston fixed at full extension by a spacer, else 0
+])
+
+#: Fields of :data:`ACTUATOR_PARAMETERS_DTYPE` that only the rig kernel reads; packing an
+#: actuator alone sets them to zero.
+RIG_PARAMETER_FIELDS = (
+    "moving_mass", "gravity_force", "end_stop_stiffness", "end_stop_damping", "spacer",
+)
+
+#: State of one actuator, advanced in place by the kernels (all float64: see
+#: :func:`float_view`).
+ACTUATOR_STATE_DTYPE = np.dtype([
+    ("cap_pressure", "f8"),  # absolute [Pa]
+    ("rod_pressure", "f8"),  # absolute [Pa]
+    ("cap_mass", "f8"),  # air in the cap chamber [kg]
+    ("rod_mass", "f8"),  # air in the rod chamber [kg]
+    ("spool_voltage", "f8"),  # effective centered voltage after the spool lag [V]
+    ("bristle_deflection", "f8"),  # LuGre bristle deflection [m]
+    ("air_consumed", "f8"),  # mass drawn from the supply since the start [kg]
+    ("position", "f8"),  # piston extension [m] (an input of the externally driven kernel)
+    ("velocity", "f8"),  # piston velocity [m/s]
+])
+
+#: What one control step of one actuator produced.
+ACTUATOR_OUTPUT_DTYPE = np.dtype([
+    ("cap_mass_flow", "f8"),  # mean net mass flow into the cap chamber over the step [kg/s]
+    ("rod_mass_flow", "f8"),  # mean net mass flow into the rod chamber over the step [kg/s]
+    ("pneumatic_force", "f8"),  # eq 4.1.11 without friction, end of step [N]
+    ("friction_force", "f8"),  # [N]
+    ("end_stop_force", "f8"),  # [N]
+    ("cap_temperature", "f8"),  # end of step [K]
+    ("rod_temperature", "f8"),  # end of step [K]
+    ("supply_mass_flow", "f8"),  # mean mass flow drawn from the supply [kg/s]
+])
+
+#: The supply all actuators of a kernel call share (an array of one record).
+SUPPLY_DTYPE = np.dtype([
+    ("model", "i8"),  # SUPPLY_IDEAL / SUPPLY_TANK
+    ("tank_pressure", "f8"),  # [Pa] (tank)
+    ("tank_volume", "f8"),  # [m^3] (tank)
+    ("tank_temperature", "f8"),  # [K] (tank)
+    ("drawn_mass", "f8"),  # total mass drawn from the supply [kg]
+    ("gas_constant", "f8"),  # R of the stored gas [J/(kg K)]
+])
+
+
+def float_view(records: np.ndarray) -> np.ndarray:
+    """The same memory as plain floats: ``(..., fields)`` float64 of an all-float64
+    record array (:data:`ACTUATOR_STATE_DTYPE`, :data:`ACTUATOR_OUTPUT_DTYPE`), columns in
+    field order. For a solver or a stack of snapshots that needs a float vector; the
+    kernels themselves read fields by name."""
+    fields = len(records.dtype.names)
+    if records.dtype.itemsize != 8 * fields or any(
+        records.dtype[name] != np.float64 for name in records.dtype.names
+    ):
+        raise TypeError(f"float_view needs float64 fields only, got {records.dtype}")
+    return structured_to_unstructured(records, copy=False)  # a view, strided or not
+
+
+def state_field_index(name: str) -> int:
+    """Column of state field ``name`` in :func:`float_view` of state records."""
+    return ACTUATOR_STATE_DTYPE.names.index(name)

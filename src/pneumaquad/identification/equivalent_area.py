@@ -29,7 +29,6 @@ from scipy.optimize import least_squares
 from pneumaquad.analysis import find_steps
 from pneumaquad.analysis.filters import sample_rate_of
 from pneumaquad.analysis.fits import FitResult, covariance_from_jacobian, r_squared
-from pneumaquad.core import layout
 from pneumaquad.core.actuator import supply_state
 from pneumaquad.core.control.pid import new_pid_state
 from pneumaquad.core.physics.chamber import chamber_volume_cap, chamber_volume_rod
@@ -225,19 +224,17 @@ def _simulate_from(
     """
     params = pack_rig_parameters(setup)
     state = rig_initial_state(setup, params)
-    row = params[0]
-    if row[layout.P_SPACER] != 1.0:
-        state[0, layout.S_POSITION] = start.position
-    position = state[0, layout.S_POSITION]
-    cap_volume = chamber_volume_cap(position, row[layout.P_CAP_AREA], row[layout.P_CAP_DEAD])
-    rod_volume = chamber_volume_rod(
-        position, row[layout.P_STROKE], row[layout.P_ROD_AREA], row[layout.P_ROD_DEAD]
-    )
-    state[0, layout.S_CAP_PRESSURE] = start.cap_pressure
-    state[0, layout.S_ROD_PRESSURE] = start.rod_pressure
-    gas = row[layout.P_R]
-    state[0, layout.S_CAP_MASS] = start.cap_pressure * cap_volume / (gas * start.cap_temperature)
-    state[0, layout.S_ROD_MASS] = start.rod_pressure * rod_volume / (gas * start.rod_temperature)
+    p, s = params[0], state[0]
+    if p["spacer"] == 0:
+        s["position"] = start.position
+    position = s["position"]
+    cap_volume = chamber_volume_cap(position, p["cap_area"], p["cap_dead_length"])
+    rod_volume = chamber_volume_rod(position, p["stroke"], p["rod_area"], p["rod_dead_length"])
+    s["cap_pressure"] = start.cap_pressure
+    s["rod_pressure"] = start.rod_pressure
+    gas = p["gas_constant"]
+    s["cap_mass"] = start.cap_pressure * cap_volume / (gas * start.cap_temperature)
+    s["rod_mass"] = start.rod_pressure * rod_volume / (gas * start.rod_temperature)
     records, rows = new_rows(command.size)
     run_rig_chunk(
         params,

@@ -37,17 +37,6 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from pneumaquad.core.layout import (
-    P_CAP_AREA,
-    P_PATM,
-    P_PE,
-    P_PS,
-    P_ROD_AREA,
-    P_ROD_SECTION,
-    P_STROKE,
-    P_UMAX,
-    P_UMIN,
-)
 from pneumaquad.network.state import StateMessage, StatusFlag
 from pneumaquad.robot.builder import RobotModel
 from pneumaquad.robot.coupling import set_seal_friction
@@ -132,11 +121,12 @@ class DynamicsSide:
         self.diverged = False
         self._last_good: dict[str, object] | None = None
         self._retracted = self.simulation.linkage["retracted_length"].copy()
-        self._stroke = self.simulation.params[:, P_STROKE].copy()
         params = self.simulation.params
-        self.voltage_limits = params[:, [P_UMIN, P_UMAX]].copy()
-        supply, exhaust, atmosphere = params[:, P_PS], params[:, P_PE], params[:, P_PATM]
-        cap, rod, section = params[:, P_CAP_AREA], params[:, P_ROD_AREA], params[:, P_ROD_SECTION]
+        self._stroke = params["stroke"].copy()
+        self.voltage_limits = np.column_stack([params["min_voltage"], params["max_voltage"]])
+        supply, exhaust = params["supply_pressure"], params["exhaust_pressure"]
+        atmosphere = params["atmospheric_pressure"]
+        cap, rod, section = params["cap_area"], params["rod_area"], params["rod_cross_section"]
         extending = supply * cap - exhaust * rod - atmosphere * section
         retracting = exhaust * cap - supply * rod - atmosphere * section
         self.force_limits = np.column_stack([retracting, extending])

@@ -3,35 +3,43 @@
 import numpy as np
 
 from pneumaquad.core import layout
-from pneumaquad.core.actuator import initial_state, pack_parameters
+from pneumaquad.core.actuator import initial_state, new_parameters, pack_parameters
 from pneumaquad.core.control.pid import controller_gains
 from pneumaquad.core.physics.force import gravity_force
 from pneumaquad.params.schema import RigSetup
 
 
-def pack_rig_parameters(setup: RigSetup) -> np.ndarray:
-    """Kernel parameter array (1, N_PARAMETERS) of a rig: actuator plus load and stops.
+def pack_rig_parameters(setup: RigSetup, out: np.ndarray | None = None) -> np.ndarray:
+    """Kernel parameters of a rig: an array of one
+    :data:`~pneumaquad.core.layout.ACTUATOR_PARAMETERS_DTYPE` record, the actuator plus
+    the rig fields (load and stops), every field by name (``out`` filled when given).
 
-    The moving mass is the load plus the piston/rod mass; gravity acts along the rod at
-    the rig's orientation (thesis 4.2.1: the board could be clamped in any orientation).
+    The moving mass is the load plus the piston/rod mass [kg]; gravity [N] acts along the
+    rod at the rig's orientation (thesis 4.2.1: the board could be clamped in any
+    orientation).
     """
-    row = pack_parameters(setup.actuator)
+    params = new_parameters(1) if out is None else out
+    record = pack_parameters(setup.actuator, params[0])
     rig = setup.rig
     moving_mass = rig.load_mass + setup.actuator.cylinder.piston_mass
-    row[layout.P_MOVING_MASS] = moving_mass
-    row[layout.P_GRAVITY_FORCE] = gravity_force(moving_mass, rig.gravity, rig.orientation_angle)
-    row[layout.P_STOP_STIFFNESS] = rig.end_stop_stiffness
-    row[layout.P_STOP_DAMPING] = rig.end_stop_damping
-    row[layout.P_SPACER] = 1.0 if rig.spacer else 0.0
-    return row[np.newaxis, :]
+    record["moving_mass"] = moving_mass
+    record["gravity_force"] = gravity_force(moving_mass, rig.gravity, rig.orientation_angle)
+    record["end_stop_stiffness"] = rig.end_stop_stiffness
+    record["end_stop_damping"] = rig.end_stop_damping
+    record["spacer"] = 1 if rig.spacer else 0
+    return params
 
 
 def rig_initial_state(setup: RigSetup, params: np.ndarray) -> np.ndarray:
-    """Initial kernel state (1, N_STATES): the rig's initial position and pressures, at rest."""
+    """Initial kernel state of a rig, an array of one
+    :data:`~pneumaquad.core.layout.ACTUATOR_STATE_DTYPE` record: the rig's initial
+    position [m] and chamber pressures [Pa], at rest."""
     rig = setup.rig
     position = setup.actuator.cylinder.stroke if rig.spacer else rig.initial_position
-    state = initial_state(params[0], position, rig.initial_cap_pressure, rig.initial_rod_pressure)
-    return state[np.newaxis, :]
+    state = np.zeros(1, layout.ACTUATOR_STATE_DTYPE)
+    initial_state(params[0], position, rig.initial_cap_pressure, rig.initial_rod_pressure,
+                  out=state[0])
+    return state
 
 
 def rig_controller_gains(setup: RigSetup) -> np.void:

@@ -32,18 +32,6 @@ import numpy as np
 from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.kernel import step_actuators
-from pneumaquad.core.layout import (
-    O_PNEUMATIC_FORCE,
-    P_OFFSET,
-    P_STROKE,
-    S_BRISTLE,
-    S_CAP_MASS,
-    S_CAP_PRESSURE,
-    S_POSITION,
-    S_ROD_MASS,
-    S_ROD_PRESSURE,
-    S_VELOCITY,
-)
 from pneumaquad.core.physics.friction import stribeck_curve
 from pneumaquad.core.pneumatics import friction_of, friction_slope_of, state_outputs
 
@@ -105,12 +93,12 @@ class Cylinders(NamedTuple):
 
 
 class ActuatorArrays(NamedTuple):
-    """The pneumatic kernel's packed arrays (pneumaquad.core.layout)."""
+    """The pneumatic kernel's record arrays (pneumaquad.core.layout)."""
 
-    params: np.ndarray  # (N, N_PARAMETERS)
-    state: np.ndarray  # (N, N_STATES)
-    supply: np.ndarray  # (N_SUPPLY,), shared
-    outputs: np.ndarray  # (N, N_OUTPUTS)
+    params: np.ndarray  # (N,) ACTUATOR_PARAMETERS_DTYPE
+    state: np.ndarray  # (N,) ACTUATOR_STATE_DTYPE
+    supply: np.ndarray  # (1,) SUPPLY_DTYPE, shared
+    outputs: np.ndarray  # (N,) ACTUATOR_OUTPUT_DTYPE
 
 
 class Controllers(NamedTuple):
@@ -175,7 +163,7 @@ def sample_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Act
     ``trace.positions`` [m] (clipped to the stroke) and ``trace.velocities`` [m/s] are
     filled from the tendons. Where ``coupling[0].pending`` is set, the chambers advance
     over the last control step with the valve commands held, the piston moving linearly
-    from its previous sample (``state[:, S_POSITION]``) to the present one; else only
+    from its previous sample (``state.position``) to the present one; else only
     the force and temperatures of the present state are filled. ``actuators.outputs``
     then holds the pneumatic force and chamber temperatures of the present instant and
     the mean flows of the last interval.
@@ -192,26 +180,27 @@ def sample_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Act
     for i in range(count):
         tendon = mujoco.tendon_ids[i]
         x = mujoco.tendon_length[tendon] - cylinders.linkage[i].retracted_length
-        positions[i] = min(max(x, 0.0), params[i, P_STROKE])
+        positions[i] = min(max(x, 0.0), params[i].stroke)
         velocities[i] = mujoco.tendon_velocity[tendon]
     dt = settings.control_step
     if coupling[0].pending != 0:
         for i in range(count):
-            state[i, S_VELOCITY] = (positions[i] - state[i, S_POSITION]) / dt
-        step_actuators(params, state, trace.commands, state[:, S_POSITION],
-                       state[:, S_VELOCITY], dt, settings.substeps, actuators.supply, outputs)
+            s = state[i]
+            s.velocity = (positions[i] - s.position) / dt
+        step_actuators(params, state, trace.commands, state.position, state.velocity, dt,
+                       settings.substeps, actuators.supply, outputs)
         coupling[0].pending = 0
     else:
         for i in range(count):
             state_outputs(params[i], state[i], positions[i], outputs[i])
     bad = -1
     for i in range(count):
-        state[i, S_POSITION] = positions[i]
         s = state[i]
+        s.position = positions[i]
         if bad < 0 and not (
             math.isfinite(positions[i]) and math.isfinite(velocities[i])
-            and math.isfinite(s[S_CAP_PRESSURE]) and math.isfinite(s[S_ROD_PRESSURE])
-            and math.isfinite(s[S_CAP_MASS]) and math.isfinite(s[S_ROD_MASS])
+            and math.isfinite(s.cap_pressure) and math.isfinite(s.rod_pressure)
+            and math.isfinite(s.cap_mass) and math.isfinite(s.rod_mass)
         ):
             bad = i
     return bad
@@ -251,7 +240,7 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
     count = params.shape[0]
     scaled = np.empty(1, PID_GAINS_DTYPE)[0]
     for i in range(count):
-        stroke = params[i, P_STROKE]
+        stroke = params[i].stroke
         joint = control_settings[i]
         if joint.mode == MODE_CLOSED_LOOP:
             target = piston_from_angle(cylinders.linkage[i], controllers.reference_angles[i])
@@ -281,7 +270,7 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
             force_gain = tracking if tracking > 0.0 else joint.force_feedback_gain
             if force_gain > 0.0:
                 voltage += force_gain * (controllers.force_reference[i]
-                                         - outputs[i, O_PNEUMATIC_FORCE])
+                                         - outputs[i].pneumatic_force)
                 voltage = min(max(voltage, scaled.min_voltage), scaled.max_voltage)
             commands[i] = voltage
         elif joint.mode == MODE_OPEN_LOOP:
@@ -289,10 +278,10 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
             commands[i] = controllers.open_loop_voltage[i]
         else:
             reference_positions[i] = positions[i]
-            commands[i] = params[i, P_OFFSET]
+            commands[i] = params[i].offset_voltage
     for i in range(count):
         tendon = mujoco.tendon_ids[i]
-        force = outputs[i, O_PNEUMATIC_FORCE]
+        force = outputs[i].pneumatic_force
         joint = control_settings[i]
         if joint.force_tracking_gain == 0.0:
             tau = joint.force_feedback_time_constant
@@ -302,10 +291,11 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
         if settings.mujoco_friction:
             set_seal_friction(mujoco, cylinders.seal, i)
         else:
+            p = params[i]
+            bristle = state[i].bristle_deflection
             applied_damping = mujoco.tendon_damping[tendon]  # in MuJoCo's passive force
-            force += applied_damping * v - friction_of(params[i], v, state[i, S_BRISTLE])
-            mujoco.tendon_damping[tendon] = max(
-                friction_slope_of(params[i], v, state[i, S_BRISTLE]), 0.0)
+            force += applied_damping * v - friction_of(p, v, bristle)
+            mujoco.tendon_damping[tendon] = max(friction_slope_of(p, v, bristle), 0.0)
         mujoco.control[mujoco.actuator_ids[i]] = force
 
 

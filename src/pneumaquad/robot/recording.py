@@ -15,13 +15,6 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from pneumaquad.core.layout import (
-    O_PNEUMATIC_FORCE,
-    P_R,
-    S_AIR_CONSUMED,
-    S_CAP_PRESSURE,
-    S_ROD_PRESSURE,
-)
 from pneumaquad.gait.stability import loaded_support
 from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
 
@@ -97,10 +90,10 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
             s.positions,
             s.velocities,
             s.commands,
-            s.state[:, S_CAP_PRESSURE],
-            s.state[:, S_ROD_PRESSURE],
-            s.outputs[:, O_PNEUMATIC_FORCE],
-            s.state[:, S_AIR_CONSUMED],
+            s.state["cap_pressure"],
+            s.state["rod_pressure"],
+            s.outputs["pneumatic_force"],
+            s.state["air_consumed"],
             s.joint_control["mode"],
             np.where(s.joint_control["force_tracking_gain"] > 0.0, s.force_reference, np.nan),
         ]
@@ -110,7 +103,8 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
     foot_forces = s.foot_normal_forces()
     feet = np.column_stack([foot_positions, foot_forces]).ravel()
     air = s.air_consumed()
-    normal_litres = air * s.params[0, P_R] * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
+    gas_constant = s.params[0]["gas_constant"]
+    normal_litres = air * gas_constant * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
     supply = np.array([s.supply_pressure(), air, normal_litres])
     com = s.data.subtree_com[0, :2]
     _, margin = loaded_support(foot_positions, foot_forces, com)

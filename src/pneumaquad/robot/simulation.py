@@ -19,24 +19,14 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from pneumaquad.core.actuator import initial_state, pack_parameters, supply_state
-from pneumaquad.core.control.pid import PID_GAINS_DTYPE, controller_gains, new_pid_state
-from pneumaquad.core.layout import (
-    N_OUTPUTS,
-    N_STATES,
-    O_PNEUMATIC_FORCE,
-    P_OFFSET,
-    P_PATM,
-    P_PE,
-    P_PS,
-    P_STROKE,
-    S_AIR_CONSUMED,
-    S_CAP_PRESSURE,
-    S_ROD_PRESSURE,
-    SUPPLY_DRAWN_MASS,
-    SUPPLY_MODEL,
-    SUPPLY_TANK_PRESSURE,
+from pneumaquad.core.actuator import (
+    initial_state,
+    new_outputs,
+    pack_parameter_array,
+    supply_state,
 )
+from pneumaquad.core.control.pid import PID_GAINS_DTYPE, controller_gains, new_pid_state
+from pneumaquad.core.layout import ACTUATOR_STATE_DTYPE, SUPPLY_TANK
 from pneumaquad.gait.stability import STANCE_FORCE
 from pneumaquad.params import ActuatorParameters
 
@@ -138,8 +128,8 @@ def _bad_actuator_quantity(simulation: RobotSimulation, cylinder: int) -> str:
     values = {
         "piston position": simulation.positions[cylinder],
         "piston velocity": simulation.velocities[cylinder],
-        "cap pressure": simulation.state[cylinder, S_CAP_PRESSURE],
-        "rod pressure": simulation.state[cylinder, S_ROD_PRESSURE],
+        "cap pressure": simulation.state[cylinder]["cap_pressure"],
+        "rod pressure": simulation.state[cylinder]["rod_pressure"],
     }
     named = [name for name, value in values.items() if not math.isfinite(value)]
     return " and ".join(named) or "the chamber mass"
@@ -170,14 +160,14 @@ class RobotSimulation:
             substeps=int(p.simulation.substeps),
             mujoco_friction=p.simulation.seal_friction == "mujoco")
         actuators = [robot.actuators[t] for t in robot.joint_types]
-        self.params = np.array([pack_parameters(a) for a in actuators])
+        self.params = pack_parameter_array(actuators)
         first = robot.actuators["alpha"]
         if supply is not None and supply != first.supply.model:
             first = first.model_copy(update={"supply": first.supply.model_copy(
                 update={"model": supply})})
         self.supply = supply_state(first)
         self._initial_supply = self.supply.copy()
-        self.outputs = np.zeros((n, N_OUTPUTS))
+        self.outputs = new_outputs(n)
         self.linkage = np.zeros(n, LINKAGE_DTYPE)
         for i, joint_type in enumerate(robot.joint_types):
             link = robot.linkages[joint_type]
@@ -199,12 +189,12 @@ class RobotSimulation:
         self.pid_state = new_pid_state(n)
         self.force_reference = np.zeros(n)
         self.reference_angles = np.zeros(n)
-        self.open_loop_voltage = self.params[:, P_OFFSET].copy()
-        self.commands = self.params[:, P_OFFSET].copy()
+        self.open_loop_voltage = self.params["offset_voltage"].copy()
+        self.commands = self.params["offset_voltage"].copy()
         self.positions = np.zeros(n)
         self.velocities = np.zeros(n)
         self.reference_positions = np.zeros(n)
-        self.state = np.zeros((n, N_STATES))
+        self.state = np.zeros(n, ACTUATOR_STATE_DTYPE)
         self.coupling = np.zeros(1, COUPLING_DTYPE)
         d = self.data
         # Named views of the arrays above for the compiled step (the same memory).
@@ -296,17 +286,18 @@ class RobotSimulation:
 
     def air_consumed(self) -> float:
         """Air drawn from the supply since the start [kg]."""
-        return float(self.supply[SUPPLY_DRAWN_MASS])
+        return float(self.supply[0]["drawn_mass"])
 
     def air_consumed_per_joint(self) -> np.ndarray:
         """Air drawn by each cylinder since the start [kg]."""
-        return self.state[:, S_AIR_CONSUMED].copy()
+        return self.state["air_consumed"].copy()
 
     def supply_pressure(self) -> float:
         """Tank pressure (tank supply) or regulated supply pressure [Pa]."""
-        if self.supply[SUPPLY_MODEL] == 1.0:
-            return float(self.supply[SUPPLY_TANK_PRESSURE])
-        return float(self.params[0, P_PS])
+        supply = self.supply[0]
+        if supply["model"] == SUPPLY_TANK:
+            return float(supply["tank_pressure"])
+        return float(self.params[0]["supply_pressure"])
 
     def set_pose(
         self,
@@ -341,13 +332,13 @@ class RobotSimulation:
         mujoco.mj_forward(self.model, self.data)
         lengths = self.data.ten_length[robot.tendon_id]
         for i in range(robot.joint_count):
-            row = self.params[i]
+            p = self.params[i]
             retracted = self.linkage[i]['retracted_length']
-            position = min(max(lengths[i] - retracted, 0.0), row[P_STROKE])
+            position = min(max(lengths[i] - retracted, 0.0), p["stroke"])
             pressure = chamber_pressure
             if pressure is None:
-                pressure = 0.5 * (row[P_PS] + row[P_PE])
-            self.state[i] = initial_state(row, position, pressure, pressure)
+                pressure = 0.5 * (p["supply_pressure"] + p["exhaust_pressure"])
+            initial_state(p, position, pressure, pressure, out=self.state[i])
         self.pid_state[:] = 0.0
         self.outputs[:] = 0.0
         self.coupling["pending"] = 0  # the chambers start at the present instant
@@ -409,7 +400,7 @@ class RobotSimulation:
         selected[slice(None) if joints is None else joints] = True
         tracking = selected & (self.joint_control["force_tracking_gain"] > 0.0)
         self.joint_control["force_tracking_gain"][tracking] = 0.0
-        self.force_reference[tracking] = self.outputs[tracking, O_PNEUMATIC_FORCE]
+        self.force_reference[tracking] = self.outputs["pneumatic_force"][tracking]
 
     def force_tracking_gains(self) -> np.ndarray:
         """Per joint: force tracking gain [V/N] (0: plain position control)."""
@@ -501,12 +492,12 @@ class RobotSimulation:
     # --- readouts --------------------------------------------------------------------
     def chamber_pressures(self) -> np.ndarray:
         """(joints, 2) cap and rod pressures [Pa], absolute."""
-        return self.state[:, [S_CAP_PRESSURE, S_ROD_PRESSURE]].copy()
+        return np.column_stack([self.state["cap_pressure"], self.state["rod_pressure"]])
 
     def cylinder_forces(self) -> np.ndarray:
         """Net pneumatic force of each cylinder [N] (eq 4.1.11 without friction)."""
-        return self.outputs[:, O_PNEUMATIC_FORCE].copy()
+        return self.outputs["pneumatic_force"].copy()
 
     def atmospheric_pressure(self) -> float:
         """Atmospheric pressure [Pa] of the actuator files."""
-        return float(self.params[0, P_PATM])
+        return float(self.params[0]["atmospheric_pressure"])

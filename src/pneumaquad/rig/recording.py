@@ -1,0 +1,191 @@
+"""The rig recording, defined once, and what a rig run returns.
+
+:data:`RIG_RECORDING` lists (field of a row record, column header) in column order:
+:data:`RIG_ROW_DTYPE` is the row record the compiled :func:`write_row` fills by name from
+the rig's kernel records (:mod:`pneumaquad.core.layout`), :data:`RIG_COLUMNS` the headers.
+Both integrators of :mod:`pneumaquad.rig.simulate` write rows here, check them for
+non-finite values and hand them to the recorder.
+"""
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from pneumaquad.core.jit import compiled
+from pneumaquad.core.layout import SUPPLY_TANK
+from pneumaquad.core.pneumatics import supply_pressure_now
+from pneumaquad.io.recording import RunRecorder
+from pneumaquad.params.schema import RigSetup
+
+#: The rig recording, defined once: (field of a row record, column header) in column
+#: order. :func:`write_row` fills the fields by name; the headers name the columns.
+RIG_RECORDING = (
+    ("time", "time [s]"),
+    ("command", "command [V]"),
+    ("reference", "reference position [m]"),
+    ("position", "position [m]"),
+    ("velocity", "velocity [m/s]"),
+    ("cap_pressure", "cap pressure [Pa]"),
+    ("rod_pressure", "rod pressure [Pa]"),
+    ("cap_temperature", "cap temperature [K]"),
+    ("rod_temperature", "rod temperature [K]"),
+    ("cap_mass_flow", "cap mass flow [kg/s]"),
+    ("rod_mass_flow", "rod mass flow [kg/s]"),
+    ("cap_mass", "cap mass [kg]"),
+    ("rod_mass", "rod mass [kg]"),
+    ("friction_force", "friction force [N]"),
+    ("pneumatic_force", "pneumatic force [N]"),
+    ("end_stop_force", "end stop force [N]"),
+    ("supply_pressure", "supply pressure [Pa]"),
+    ("supply_mass_flow", "supply mass flow [kg/s]"),
+    ("air_consumed", "air consumed [kg]"),
+    ("tank_pressure", "tank pressure [Pa]"),
+    ("net_force", "net force [N]"),
+    ("air_consumed_normal_litres", "air consumed [NL]"),
+)
+RIG_ROW_DTYPE = np.dtype([(field, "f8") for field, _ in RIG_RECORDING])
+RIG_COLUMNS = tuple(header for _, header in RIG_RECORDING)
+N_COLUMNS = len(RIG_COLUMNS)
+
+#: Normal conditions (DIN 1343) for normal litres: pressure [Pa] and temperature [K].
+NORMAL_PRESSURE = 101325.0
+NORMAL_TEMPERATURE = 273.15
+
+#: Columns that are NaN by design: the reference of an open-loop run, the tank pressure
+#: of an ideal supply.
+_REFERENCE_COLUMN = RIG_COLUMNS.index("reference position [m]")
+_TANK_COLUMN = RIG_COLUMNS.index("tank pressure [Pa]")
+
+
+@compiled
+def write_row(records, index, sample_time, command, reference, p, s, out, supply):
+    """Fill record ``index`` of ``records`` (:data:`RIG_ROW_DTYPE`) from the rig's records
+    after a step: parameters ``p``, state ``s``, outputs ``out`` and ``supply``
+    (:mod:`pneumaquad.core.layout`)."""
+    row = records[index]
+    row.time = sample_time
+    row.command = command
+    row.reference = reference
+    row.position = s.position
+    row.velocity = s.velocity
+    row.cap_pressure = s.cap_pressure
+    row.rod_pressure = s.rod_pressure
+    row.cap_temperature = out.cap_temperature
+    row.rod_temperature = out.rod_temperature
+    row.cap_mass_flow = out.cap_mass_flow
+    row.rod_mass_flow = out.rod_mass_flow
+    row.cap_mass = s.cap_mass
+    row.rod_mass = s.rod_mass
+    row.friction_force = out.friction_force
+    row.pneumatic_force = out.pneumatic_force
+    row.end_stop_force = out.end_stop_force
+    row.supply_pressure = supply_pressure_now(p, supply)
+    row.supply_mass_flow = out.supply_mass_flow
+    row.air_consumed = s.air_consumed
+    row.tank_pressure = supply.tank_pressure if supply.model == SUPPLY_TANK else math.nan
+    # eq 4.1.11 with friction: what accelerates the piston besides gravity and the stops
+    row.net_force = out.pneumatic_force - out.friction_force
+    normal_density = NORMAL_PRESSURE / (p.gas_constant * NORMAL_TEMPERATURE)
+    row.air_consumed_normal_litres = s.air_consumed / normal_density * 1000.0
+
+
+def new_rows(count: int) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` zeroed recording rows: the records (:data:`RIG_ROW_DTYPE`) the compiled
+    code fills, and the same memory as a ``(count, N_COLUMNS)`` float array."""
+    records = np.zeros(count, RIG_ROW_DTYPE)
+    return records, records.view(np.float64).reshape(count, N_COLUMNS)
+
+
+
+
+@dataclass
+class RigResult:
+    """Outcome of a rig run: the recording as columns, and how the run went."""
+
+    recording: dict[str, np.ndarray]
+    interrupted: bool
+    wall_time: float
+    integrator: str
+
+
+ProgressCallback = Callable[[int, int], None]
+
+
+class RigDivergedError(RuntimeError):
+    """A rig run produced a non-finite value; the rows before it were recorded.
+
+    Attributes
+    ----------
+    quantity : str
+        Recording column (``"cap pressure [Pa]"``) of the first non-finite value.
+    time : float
+        Sample time of the row holding it [s].
+    result : RigResult
+        The run up to the last finite row.
+    """
+
+    def __init__(self, quantity: str, time: float, result: RigResult) -> None:
+        self.quantity = quantity
+        self.time = time
+        self.result = result
+        rows = result.recording["time [s]"]
+        kept = (
+            f"the recording up to t = {rows[-1]:.6g} s is kept"
+            if rows.size
+            else "nothing before it was recorded"
+        )
+        super().__init__(
+            f"the rig simulation stopped: {quantity} became non-finite at t = {time:.6g} s "
+            f"({kept}); the parameters or the command drive the model where it cannot be "
+            "integrated; try a smaller simulation.control_step, more simulation.substeps "
+            "or other parameter values"
+        )
+
+
+def skipped_columns(setup: RigSetup, closed_loop: bool) -> list[int]:
+    """Columns that may hold NaN in this run: the reference of an open-loop run, the tank
+    pressure of an ideal supply."""
+    skipped = [] if closed_loop else [_REFERENCE_COLUMN]
+    if setup.actuator.supply.model != "tank":
+        skipped.append(_TANK_COLUMN)
+    return skipped
+
+
+def first_non_finite(rows: np.ndarray, skipped: list[int]) -> tuple[int, int] | None:
+    """(row, column) of the first non-finite value of ``rows`` outside ``skipped`` columns.
+
+    Rows are searched in order, and within the first bad row the first column in
+    :data:`RIG_COLUMNS` order is named; ``None`` when every value is finite.
+    """
+    bad = ~np.isfinite(rows)
+    bad[:, skipped] = False
+    bad_rows = np.flatnonzero(bad.any(axis=1))
+    if bad_rows.size == 0:
+        return None
+    row = int(bad_rows[0])
+    return row, int(np.flatnonzero(bad[row])[0])
+
+
+def as_columns(rows: np.ndarray) -> dict[str, np.ndarray]:
+    """Rows as {column header: values}."""
+    return {name: rows[:, index].copy() for index, name in enumerate(RIG_COLUMNS)}
+
+
+def record_rows(recorder: RunRecorder | None, block: np.ndarray) -> None:
+    """Hand ``block`` to the recorder, if any and not empty."""
+    if recorder is not None and block.shape[0]:
+        recorder.append(block)
+
+
+def stop_diverged(recorder: RunRecorder | None, rows: np.ndarray, flushed: int, good: int,
+                  quantity: str, when: float, started: float, integrator: str) -> None:
+    """Record rows ``flushed:good`` (the last good one is ``good - 1``) and raise
+    :class:`RigDivergedError` naming ``quantity`` and ``when`` [s]."""
+    record_rows(recorder, rows[flushed:good])
+    result = RigResult(as_columns(rows[:good]), False, time.perf_counter() - started,
+                       integrator)
+    raise RigDivergedError(quantity, when, result)
+
