@@ -32,3 +32,17 @@ def test_robot_walk_defaults_equal_the_walk_settings() -> None:
     assert {"distance", "speed", "duty_factor", "period", "margin", "step_height",
             "lift_fraction", "transfer_gap", "force_gain", "swing_from_ground",
             "heading_hold"} <= set(checked)
+
+
+def test_the_cli_crawl_and_the_console_crawl_share_their_common_settings() -> None:
+    from dataclasses import fields
+
+    from pneumaquad.gait.online import OnlineCrawlSettings
+    from pneumaquad.gait.settings import CrawlSettings
+
+    walk, online = WalkSettings(), OnlineCrawlSettings()
+    for field in fields(CrawlSettings):
+        assert getattr(walk, field.name) == getattr(online, field.name) == field.default, (
+            field.name)
+    assert issubclass(WalkSettings, CrawlSettings)
+    assert issubclass(OnlineCrawlSettings, CrawlSettings)

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .crawl import LATERAL_SEQUENCE, LEGS
+from .settings import CrawlSettings
 from .stability import stability_margin, support_and_margin, support_polygon
 
 __all__ = ["OnlineCrawl", "OnlineCrawlSettings", "shift_for_margin", "swing_point"]
@@ -43,17 +44,20 @@ FRONT_TO_REAR = {"rear_left": "front_left", "rear_right": "front_right"}
 
 
 @dataclass(frozen=True)
-class OnlineCrawlSettings:
+class OnlineCrawlSettings(CrawlSettings):
     """Timing and limits of the online crawl.
+
+    ``step_height`` and ``minimum_margin`` and their defaults are those of every crawl
+    (:class:`.settings.CrawlSettings`, shared with the CLI's wave gait).
 
     Attributes
     ----------
-    shift_time, swing_time : float [s]
-        Duration of a body shift (four feet down) and of a swing.
     step_height : float [m]
         Foot lift at mid-swing.
     minimum_margin : float [m]
         Static margin every shift must reach before a lift.
+    shift_time, swing_time : float [s]
+        Duration of a body shift (four feet down) and of a swing.
     max_step : float [m]
         Longest foot step on the ground (footholds farther away are shortened).
     idle_distance : float [m]
@@ -69,8 +73,6 @@ class OnlineCrawlSettings:
 
     shift_time: float = 1.0
     swing_time: float = 1.0
-    step_height: float = 0.04
-    minimum_margin: float = 0.04
     max_step: float = 0.15
     idle_distance: float = 0.01
     max_reach: float = 0.08

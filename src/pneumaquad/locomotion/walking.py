@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from pneumaquad.gait.settings import CrawlSettings
 from pneumaquad.gait.stability import STANCE_FORCE, support_and_margin
 from pneumaquad.locomotion.walk import WalkPlan, plan_walk, robot_gait
 from pneumaquad.robot.builder import RobotModel
@@ -37,21 +38,20 @@ WALKING_ANGLES = np.radians([0.0, -20.0, 80.0])
 
 
 @dataclass(frozen=True)
-class WalkSettings:
-    """Gait settings: speed [m/s], heading [rad], duty factor, period [s], step height
-    [m], planned minimum static margin [m], distance to walk [m], the swing's share of
-    pure lift and lowering and the four-legged transfer gap before each front lift-off
-    (cycle fractions, :class:`pneumaquad.gait.crawl.CrawlGait`), the force-controlled
-    stance (None: plain position control of the planned joint angles) and the swing and
-    heading corrections. Defaults: the settings that walked every terrain in our
-    measurements (docs/robot.md)."""
+class WalkSettings(CrawlSettings):
+    """Gait settings: step height [m] and planned minimum static margin [m] (with their
+    defaults from :class:`pneumaquad.gait.settings.CrawlSettings`, which the console's
+    online crawl shares), speed [m/s], heading [rad], duty factor, period [s], distance
+    to walk [m], the swing's share of pure lift and lowering and the four-legged transfer
+    gap before each front lift-off (cycle fractions,
+    :class:`pneumaquad.gait.crawl.CrawlGait`), the force-controlled stance (None: plain
+    position control of the planned joint angles) and the swing and heading corrections.
+    Defaults: the settings that walked every terrain in our measurements (docs/robot.md)."""
 
     speed: float = 0.02
     heading: float = 0.0
     duty_factor: float = 0.9
     period: float = 8.0
-    step_height: float = 0.04
-    minimum_margin: float = 0.06
     distance: float = 1.0
     lift_fraction: float = 0.25
     transfer_gap: float = 0.04
