@@ -8,10 +8,11 @@ from pathlib import Path
 
 import pytest
 
+from pneumaquad.io.run_folder import RunFolderError, detect_run_kind
 from pneumaquad.reporting import build_run_report, load_run_folder
 from pneumaquad.reporting.html import format_value
 from pneumaquad.reporting.parameters import flatten_summary
-from pneumaquad.reporting.run_folder import ReportError, detect_run_kind
+from pneumaquad.reporting.run_folder import ReportError
 
 from .conftest import RIG_DESCRIPTION
 
@@ -87,7 +88,7 @@ def test_run_kind_comes_from_the_tables(rig_run: Path, robot_run: Path) -> None:
     assert load_run_folder(rig_run).kind == "rig"
     robot = load_run_folder(robot_run)
     assert robot.kind == "robot" and set(robot.actuators) == {"alpha", "beta", "gamma"}
-    with pytest.raises(ReportError, match="neither"):
+    with pytest.raises(RunFolderError, match="neither"):
         detect_run_kind({"meta": {}})
 
 

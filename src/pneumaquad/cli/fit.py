@@ -43,7 +43,7 @@ from pneumaquad.identification.valve import (
     input_pressure_curves,
 )
 from pneumaquad.io.measured import ColumnMapping, MeasuredDataError, load_mapping, read_measured
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.params import ParameterError, load_rig, parse_quantity
 from pneumaquad.params.schema import RigSetup
 

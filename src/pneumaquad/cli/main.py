@@ -28,7 +28,7 @@ from pneumaquad.cli.common import (
     quantity,
     simulated_duration,
 )
-from pneumaquad.io.recording import create_run_folder
+from pneumaquad.io.run_folder import create_run_folder
 from pneumaquad.params import (
     ParameterError,
     list_parameter_sets,

@@ -134,7 +134,7 @@ def serve_dynamics(
     if layout != "pnqd":
         _fail(f"--layout {layout!r}: expected pnqd or thesis")
     from pneumaquad.io.interruption import deferred_interrupt
-    from pneumaquad.io.recording import create_run_folder
+    from pneumaquad.io.run_folder import create_run_folder
     from pneumaquad.network.dynamics_side import COMMAND_KINDS, DynamicsSide
     from pneumaquad.network.server import MODES, DynamicsServer
 
@@ -176,7 +176,7 @@ def _serve_thesis(params: str, overrides: list[str] | None, configuration: str, 
                   port: int, peer: str | None, duration: float | None, posture: str,
                   output: Path | None) -> None:
     from pneumaquad.io.interruption import deferred_interrupt
-    from pneumaquad.io.recording import create_run_folder
+    from pneumaquad.io.run_folder import create_run_folder
     from pneumaquad.network.dynamics_side import DynamicsSide
     from pneumaquad.network.thesis_server import ThesisServer
 
@@ -225,7 +225,7 @@ def serve_actuators(
 ) -> None:
     """Run cylinders, valves and controllers against a dynamics server (lockstep)."""
     from pneumaquad.io.interruption import deferred_interrupt
-    from pneumaquad.io.recording import create_run_folder
+    from pneumaquad.io.run_folder import create_run_folder
     from pneumaquad.network.actuator_side import ActuatorSide
     from pneumaquad.network.client import (
         ActuatorClient,

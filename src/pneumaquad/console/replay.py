@@ -1,8 +1,8 @@
 """Replay of a robot run folder in the console, and the static stability margin.
 
-A run folder (``pneumaquad robot stand/walk ... -o FOLDER``) holds ``model.xml`` (the
-compiled MJCF), ``trajectory.npz`` (``time`` (T,), ``qpos`` (T, nq) at the recording rate)
-and ``recording.parquet`` (:func:`pneumaquad.io.recording.read_recording`).
+A run folder (``pneumaquad robot stand/walk ... -o FOLDER``, docs/run-folder.md) holds
+``model.xml`` (the compiled MJCF), ``trajectory.npz`` (``time`` (T,), ``qpos`` (T, nq) at
+the recording rate) and the recording (:func:`pneumaquad.io.run_folder.read_recording`).
 :class:`ReplayRun` loads it; :meth:`ReplayRun.show` puts the nearest trajectory sample
 into its own :class:`mujoco.MjData` (``mj_forward``) for the scene, and
 :meth:`ReplayRun.row_at` finds the recording row nearest in time for the readouts.
@@ -21,7 +21,12 @@ import mujoco
 import numpy as np
 
 from pneumaquad.gait.stability import STANCE_FORCE, loaded_support
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import (
+    MODEL_NAME,
+    TRAJECTORY_NAME,
+    RunFolderVersionError,
+    read_recording,
+)
 from pneumaquad.robot.simulation import RobotSimulation
 
 __all__ = ["CONTACT_FORCE", "ReplayError", "ReplayRun", "Stability", "static_stability"]
@@ -93,28 +98,30 @@ class ReplayRun:
         folder = Path(folder).expanduser()
         if not folder.is_dir():
             raise ReplayError(f"{folder}: not a folder")
-        missing = [n for n in ("model.xml", "trajectory.npz") if not (folder / n).is_file()]
+        missing = [n for n in (MODEL_NAME, TRAJECTORY_NAME) if not (folder / n).is_file()]
         if missing:
             raise ReplayError(f"{folder}: not a run folder (no {' and no '.join(missing)})")
         try:
-            self.model = mujoco.MjModel.from_xml_path(str(folder / "model.xml"))
+            self.model = mujoco.MjModel.from_xml_path(str(folder / MODEL_NAME))
         except ValueError as error:
-            raise ReplayError(f"{folder / 'model.xml'}: {error}") from error
+            raise ReplayError(f"{folder / MODEL_NAME}: {error}") from error
         try:
-            with np.load(folder / "trajectory.npz") as trajectory:
+            with np.load(folder / TRAJECTORY_NAME) as trajectory:
                 self.times = np.asarray(trajectory["time"], dtype=float)
                 self.qpos = np.asarray(trajectory["qpos"], dtype=float)
         except (OSError, KeyError, ValueError) as error:
-            raise ReplayError(f"{folder / 'trajectory.npz'}: unreadable ({error})") from error
+            raise ReplayError(f"{folder / TRAJECTORY_NAME}: unreadable ({error})") from error
         if self.qpos.ndim != 2 or self.qpos.shape != (len(self.times), self.model.nq):
-            raise ReplayError(f"{folder / 'trajectory.npz'}: qpos {self.qpos.shape} does not "
+            raise ReplayError(f"{folder / TRAJECTORY_NAME}: qpos {self.qpos.shape} does not "
                               f"match {len(self.times)} samples of nq = {self.model.nq}")
         if len(self.times) == 0:
-            raise ReplayError(f"{folder / 'trajectory.npz'}: no samples")
+            raise ReplayError(f"{folder / TRAJECTORY_NAME}: no samples")
         self.folder = folder
         self.data = mujoco.MjData(self.model)
         try:
             self.recording: dict[str, np.ndarray] | None = read_recording(folder)
+        except RunFolderVersionError as error:
+            raise ReplayError(str(error)) from error
         except (OSError, ValueError):
             self.recording = None
         self.record_times = (None if self.recording is None

@@ -7,7 +7,6 @@ Radau reference, and a finite tank running down. Each experiment gets its own ru
 ``report.md`` and ``report.html`` (figures embedded) summarise them.
 """
 
-import json
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,7 @@ import numpy as np
 from pneumaquad.core.actuator import chamber_ports
 from pneumaquad.core.valve_fit import input_pressure
 from pneumaquad.demo.stiction_plot import plot_stiction_comparison
+from pneumaquad.io.run_folder import SUMMARY_NAME, write_json
 from pneumaquad.params import load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH as INCH
 from pneumaquad.params.conversions import PASCAL_PER_PSI as PSI
@@ -73,9 +73,8 @@ class DemoReport:
         (self.folder / "report.md").write_text("\n".join(lines), encoding="utf-8")
         page.write(self.folder / "report.html")
         key_figures = {s["title"]: s["figures"] for s in self.sections}
-        (self.folder / "summary.json").write_text(
-            json.dumps(key_figures, indent=2), encoding="utf-8"
-        )
+        # the demo folder holds run folders; its own summary is the report's key figures
+        write_json(self.folder / SUMMARY_NAME, key_figures)
         return self.folder / "report.html"
 
 

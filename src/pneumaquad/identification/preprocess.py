@@ -1,6 +1,6 @@
 """Shared signal preparation for parameter identification from rig recordings.
 
-A recording (simulated, `pneumaquad.io.recording.read_recording`, or measured,
+A recording (simulated, `pneumaquad.io.run_folder.read_recording`, or measured,
 `pneumaquad.io.measured.read_measured`) is turned into filtered position, velocity,
 acceleration and pressures, and into the forces of the piston force balance, eq 4.1.11:
 

@@ -19,7 +19,7 @@ from .curves import (
 )
 from .html import HtmlPage, escape, format_value
 from .report import REPORT_NAME, build_run_report, write_run_report
-from .run_folder import ReportError, RunFolder, load_run_folder
+from .run_folder import LoadedRun, ReportError, load_run_folder
 
 __all__ = [
     "REPORT_NAME",
@@ -27,10 +27,10 @@ __all__ = [
     "CostRow",
     "CostTable",
     "HtmlPage",
+    "LoadedRun",
     "MeasuredComparison",
     "PressureCurve",
     "ReportError",
-    "RunFolder",
     "area_curves",
     "build_run_report",
     "compare_with_measured",

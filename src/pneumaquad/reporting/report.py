@@ -17,7 +17,7 @@ from pneumaquad.params import RigSetup
 
 from .comparison import compare_with_measured
 from .html import HtmlPage
-from .run_folder import ReportError, RunFolder, load_run_folder
+from .run_folder import LoadedRun, ReportError, load_run_folder
 from .sections import (
     add_comparison,
     add_model_curves,
@@ -34,7 +34,7 @@ Progress = Callable[[int, int], None]
 
 
 def write_run_report(
-    run: RunFolder,
+    run: LoadedRun,
     folder: Path,
     measured: dict[str, np.ndarray] | None = None,
     measured_source: str = "",
@@ -45,7 +45,7 @@ def write_run_report(
 
     Parameters
     ----------
-    run : RunFolder
+    run : LoadedRun
         The loaded run.
     folder : Path
         Report folder (created).

@@ -1,22 +1,20 @@
-"""Reading a run folder (rig or robot) for a report.
+"""A run folder (rig or robot) loaded for a report.
 
-A run folder holds ``parameters.toml`` (resolved, SI), ``recording.parquet`` and/or
-``recording.csv``, ``summary.json`` and, for robot runs, ``model.xml``, ``trajectory.npz``
-and plots. Rig files have a ``[rig]`` table, robot files a ``[leg]`` table; that decides
-which loader validates them.
+The files are read by :func:`pneumaquad.io.run_folder.read_run_folder` (the one reader of
+the layout, docs/run-folder.md); here ``parameters.toml`` is validated with the loader its
+kind asks for (a ``[rig]`` table: rig run, a ``[leg]`` table: robot run) and the actuator
+sets of a robot run are loaded for the model curves.
 """
 
 from __future__ import annotations
 
-import json
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import RunFolder, RunFolderError, RunKind, read_run_folder
 from pneumaquad.params import (
     JOINT_NAMES,
     ActuatorParameters,
@@ -28,9 +26,7 @@ from pneumaquad.params import (
     load_robot,
 )
 
-__all__ = ["ReportError", "RunFolder", "detect_run_kind", "load_run_folder"]
-
-RunKind = Literal["rig", "robot"]
+__all__ = ["LoadedRun", "ReportError", "load_run_folder"]
 
 
 class ReportError(ValueError):
@@ -38,36 +34,52 @@ class ReportError(ValueError):
 
 
 @dataclass(frozen=True)
-class RunFolder:
-    """A loaded run folder.
+class LoadedRun:
+    """A run folder with its parameters validated.
 
     Attributes
     ----------
-    path : Path
-        The folder.
-    kind : {"rig", "robot"}
-        Which simulator wrote it.
+    folder : RunFolder
+        The files as read (summary, recording, timing, format version).
     parameters : RigSetup or RobotParameters
         The validated resolved parameters (SI).
     actuators : dict of str to ActuatorParameters
         Label → actuator parameters: ``{"rig": ...}`` for a rig run, joint type
         (``"alpha"``, ``"beta"``, ``"gamma"``) → its set for a robot run (sets that could
         not be loaded are left out and listed in ``notes``).
-    recording : dict of str to numpy.ndarray
-        Columns ``"quantity [unit]"`` in SI.
-    summary : dict
-        Contents of ``summary.json`` (empty if absent).
     notes : list of str
         Things the report should mention (missing optional files, unloadable sets).
     """
 
-    path: Path
-    kind: RunKind
+    folder: RunFolder
     parameters: RigSetup | RobotParameters
     actuators: dict[str, ActuatorParameters]
-    recording: dict[str, np.ndarray]
-    summary: dict[str, Any]
     notes: list[str] = field(default_factory=list)
+
+    @property
+    def path(self) -> Path:
+        """The run folder."""
+        return self.folder.path
+
+    @property
+    def kind(self) -> RunKind:
+        """``"rig"`` or ``"robot"``."""
+        return self.folder.kind
+
+    @property
+    def recording(self) -> dict[str, np.ndarray]:
+        """Columns ``"quantity [unit]"`` in SI."""
+        return self.folder.recording
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """Contents of ``summary.json`` (empty if absent)."""
+        return self.folder.summary
+
+    @property
+    def timing(self) -> dict[str, Any] | None:
+        """``timing.json`` of a networked run."""
+        return self.folder.timing
 
     @property
     def description(self) -> str:
@@ -80,61 +92,6 @@ class RunFolder:
         if isinstance(self.parameters, RigSetup):
             return self.parameters.actuator.meta.name
         return self.parameters.meta.name
-
-
-def detect_run_kind(raw: dict[str, Any]) -> RunKind:
-    """``"rig"`` for a parameter table with ``[rig]``, ``"robot"`` for one with ``[leg]``.
-
-    Raises
-    ------
-    ReportError
-        When neither table is there.
-    """
-    if "rig" in raw:
-        return "rig"
-    if "leg" in raw:
-        return "robot"
-    raise ReportError(
-        "parameters.toml has neither a [rig] table (rig run) nor a [leg] table (robot run)"
-    )
-
-
-def _read_parameters(path: Path) -> tuple[RunKind, RigSetup | RobotParameters]:
-    file = path / "parameters.toml"
-    if not file.is_file():
-        raise ReportError(f"{path} is not a run folder: it has no parameters.toml")
-    try:
-        raw = tomllib.loads(file.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-        raise ReportError(f"{file} is not valid TOML: {error}") from None
-    kind = detect_run_kind(raw)
-    return kind, (load_rig(file) if kind == "rig" else load_robot(file))
-
-
-def _read_summary(path: Path, notes: list[str]) -> dict[str, Any]:
-    file = path / "summary.json"
-    if not file.is_file():
-        notes.append("summary.json is missing: no metrics table.")
-        return {}
-    try:
-        summary = json.loads(file.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise ReportError(f"{file} is not valid JSON: {error}") from None
-    if not isinstance(summary, dict):
-        raise ReportError(f"{file} should hold a JSON object, not {type(summary).__name__}")
-    return summary
-
-
-def _read_recording(path: Path) -> dict[str, np.ndarray]:
-    try:
-        recording = read_recording(path)
-    except FileNotFoundError:
-        raise ReportError(f"{path} has no recording (recording.parquet or recording.csv)") from None
-    except (OSError, ValueError) as error:
-        raise ReportError(f"the recording in {path} cannot be read: {error}") from None
-    if "time [s]" not in recording:
-        raise ReportError(f"the recording in {path} has no 'time [s]' column")
-    return recording
 
 
 def _robot_actuators(
@@ -153,37 +110,26 @@ def _robot_actuators(
     return actuators
 
 
-def load_run_folder(path: Path) -> RunFolder:
-    """Load a rig or robot run folder.
-
-    Parameters
-    ----------
-    path : Path
-        The run folder.
-
-    Returns
-    -------
-    RunFolder
+def load_run_folder(path: Path) -> LoadedRun:
+    """Load a rig or robot run folder and validate its parameters.
 
     Raises
     ------
     ReportError
-        If the folder does not exist or lacks ``parameters.toml`` or a recording, or a
-        file is malformed.
+        If the folder does not exist or lacks ``parameters.toml`` or a recording, a file
+        is malformed, or it was written in a newer run folder format.
     ParameterError
         If ``parameters.toml`` does not validate.
     """
-    path = Path(path)
-    if not path.exists():
-        raise ReportError(f"run folder {path} does not exist")
-    if not path.is_dir():
-        raise ReportError(f"{path} is not a folder (expected a run folder)")
-    notes: list[str] = []
-    kind, parameters = _read_parameters(path)
-    recording = _read_recording(path)
-    summary = _read_summary(path, notes)
+    try:
+        folder = read_run_folder(Path(path))
+    except RunFolderError as error:
+        raise ReportError(str(error)) from None
+    notes = list(folder.notes)
+    loader = load_rig if folder.kind == "rig" else load_robot
+    parameters = loader(folder.parameters_file)
     if isinstance(parameters, RigSetup):
         actuators = {"rig": parameters.actuator}
     else:
         actuators = _robot_actuators(parameters, notes)
-    return RunFolder(path, kind, parameters, actuators, recording, summary, notes)
+    return LoadedRun(folder, parameters, actuators, notes)

@@ -5,14 +5,13 @@ Figures are written as PNG files into the report folder and embedded in the page
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from pneumaquad.analysis.compare import comparison_rows, comparison_to_markdown
-from pneumaquad.io.recording import jsonable
+from pneumaquad.io.run_folder import TIMING_NAME, write_json
 from pneumaquad.params import RigSetup, RobotParameters
 from pneumaquad.reporting.plotting import plot_rig_run
 from pneumaquad.reporting.robot_plots import plot_body, plot_joints
@@ -27,7 +26,7 @@ from .curve_plots import plot_area_curves, plot_friction_curves, plot_input_pres
 from .curves import group_equal
 from .html import HtmlPage
 from .parameters import actuator_rows, flatten_summary, rig_parameter_rows, robot_parameter_rows
-from .run_folder import RunFolder
+from .run_folder import LoadedRun
 
 __all__ = [
     "add_comparison",
@@ -43,7 +42,7 @@ __all__ = [
 _PARAMETER_HEADERS = ("group", "parameter", "value (SI)", "unit", "thesis units")
 
 
-def add_parameters(page: HtmlPage, run: RunFolder) -> None:
+def add_parameters(page: HtmlPage, run: LoadedRun) -> None:
     """Key run parameters (and, for robots, one table per distinct actuator set)."""
     page.heading("Run parameters")
     page.paragraph(
@@ -55,14 +54,14 @@ def add_parameters(page: HtmlPage, run: RunFolder) -> None:
     assert isinstance(run.parameters, RobotParameters)
     page.table(
         _PARAMETER_HEADERS,
-        robot_parameter_rows(run.parameters, run.summary, run.path / "model.xml"),
+        robot_parameter_rows(run.parameters, run.summary, run.folder.model_file),
     )
     for labels, actuator in group_equal(run.actuators):
         page.heading(f"Actuator of the {labels} joints ({actuator.meta.name})", level=3)
         page.table(_PARAMETER_HEADERS, actuator_rows(actuator))
 
 
-def add_summary(page: HtmlPage, run: RunFolder) -> None:
+def add_summary(page: HtmlPage, run: LoadedRun) -> None:
     """The metrics of summary.json as a two-column table (nested tables flattened)."""
     page.heading("Metrics (summary.json)")
     if not run.summary:
@@ -71,7 +70,7 @@ def add_summary(page: HtmlPage, run: RunFolder) -> None:
     page.table(("metric", "value"), flatten_summary(run.summary), digits=6)
 
 
-def commanded_joints(run: RunFolder) -> list[str]:
+def commanded_joints(run: LoadedRun) -> list[str]:
     """Joints under closed-loop control (keys of summary "angle rmse [deg]"); failing
     that, joints whose reference moves; failing that, the front-right leg."""
     controlled = run.summary.get("angle rmse [deg]")
@@ -92,7 +91,7 @@ def commanded_joints(run: RunFolder) -> list[str]:
     ]
 
 
-def add_time_histories(page: HtmlPage, run: RunFolder, folder: Path) -> None:
+def add_time_histories(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
     """Rig: position, pressures and command (Fig. 25–28). Robot: per commanded leg,
     reference vs angle and both pressures (Fig. 38–45); the body when it is free."""
     page.heading("Time histories")
@@ -144,7 +143,7 @@ def add_time_histories(page: HtmlPage, run: RunFolder, folder: Path) -> None:
 MAX_EMBEDDED_GIF = 12 * 1024 * 1024
 
 
-def add_walking(page: HtmlPage, run: RunFolder) -> None:
+def add_walking(page: HtmlPage, run: LoadedRun) -> None:
     """The walking judgement of a ``robot walk`` run (summary "walking") and walking.png."""
     outcome = run.summary.get("walking")
     if not outcome:
@@ -161,7 +160,7 @@ def add_walking(page: HtmlPage, run: RunFolder) -> None:
                             "the gait holds down (tip-over margin), foot heights.")
 
 
-def velocity_limit(run: RunFolder, default: float = 0.3) -> float:
+def velocity_limit(run: LoadedRun, default: float = 0.3) -> float:
     """Half width [m/s] of the friction plot: 1.2 × the largest recorded piston speed,
     within 0.02–2 m/s; ``default`` without a velocity column."""
     speeds = [
@@ -175,7 +174,7 @@ def velocity_limit(run: RunFolder, default: float = 0.3) -> float:
     return float(np.clip(1.2 * max(speeds), 0.02, 2.0))
 
 
-def add_model_curves(page: HtmlPage, run: RunFolder, folder: Path) -> None:
+def add_model_curves(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
     """Friction law (Fig. 15–16), equivalent areas (Fig. 24), input pressures (Fig. 23)."""
     page.heading("Model curves from the run's parameters")
     if not run.actuators:
@@ -213,7 +212,7 @@ def add_model_curves(page: HtmlPage, run: RunFolder, folder: Path) -> None:
 
 def add_comparison(
     page: HtmlPage,
-    run: RunFolder,
+    run: LoadedRun,
     comparison: MeasuredComparison,
     measured: dict[str, np.ndarray],
     source: str,
@@ -278,23 +277,19 @@ def add_comparison(
         "time offset [s]": comparison.time_offset,
         "source": source,
     }
-    (folder / "comparison.json").write_text(
-        json.dumps(jsonable(document), indent=2, allow_nan=False) + "\n", encoding="utf-8"
-    )
+    write_json(folder / "comparison.json", document)
 
 
-def add_network_timing(page: HtmlPage, run: RunFolder) -> None:
+def add_network_timing(page: HtmlPage, run: LoadedRun) -> None:
     """A networked run's packet timing (``timing.json``, ``rtt.png``, ``timeline.png``):
     round trips, pauses, losses, duplicates, reorders, malformed datagrams, jitter."""
-    file = run.path / "timing.json"
-    if not file.is_file():
+    timing = run.timing
+    if timing is None:
+        if (run.path / TIMING_NAME).is_file():  # unreadable: the report's notes say why
+            page.heading("Network timing")
+            page.paragraph(f"{TIMING_NAME} cannot be read (see the notes above).", note=True)
         return
     page.heading("Network timing")
-    try:
-        timing = json.loads(file.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        page.paragraph(f"timing.json cannot be read: {error}", note=True)
-        return
     page.paragraph(
         "Per-datagram log of the co-simulation (packets.parquet), summarised: the round "
         "trips, the pauses between datagrams (the thesis tracked these with Wireshark, "

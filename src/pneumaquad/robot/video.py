@@ -36,10 +36,11 @@ import imageio.v3 as imageio_v3
 import numpy as np
 from PIL import Image
 
+from pneumaquad.io.run_folder import MODEL_NAME, TRAJECTORY_NAME
+
 if TYPE_CHECKING:
     import mujoco
 
-MODEL_NAME, TRAJECTORY_NAME = "model.xml", "trajectory.npz"
 MP4_NAME, GIF_NAME, FIRST_FRAME_NAME = "video.mp4", "video.gif", "first-frame.png"
 GIF_FPS, GIF_MAX_WIDTH = 10.0, 320
 GIF_MAX_FRAMES = 300  # a 320 px preview of about 10 MB at most

@@ -1,7 +1,7 @@
 """Read lab recordings (CSV, MATLAB v5 and v7.3 ``.mat``) into the project's SI columns.
 
 The output matches a simulated rig recording (`pneumaquad.rig.simulate.RIG_COLUMNS`,
-`pneumaquad.io.recording.read_recording`): a dict of float64 arrays keyed ``"time [s]"``,
+`pneumaquad.io.run_folder.read_recording`): a dict of float64 arrays keyed ``"time [s]"``,
 ``"position [m]"``, ``"cap pressure [Pa]"`` (absolute), ... Only the columns named in the
 mapping are read. Every problem found is reported at once in a `MeasuredDataError`; no
 sample is dropped or repaired.
