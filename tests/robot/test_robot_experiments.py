@@ -148,7 +148,7 @@ def test_cli_robot_geometry_and_export(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(("arguments", "message"), [
     (["--transfer-gap", "0.3"], "leaves none"),  # duty 0.9: no window left for the sway
-    (["--duty-factor", "0.76"], "does not fit"),  # the default gap 0.04 > 2·0.76 − 1.5
+    (["--duty-factor", "0.76"], "transfer gap 0.04 must be in [0, 0.02]"),  # > 2·0.76 − 1.5
     (["--duty-factor", "0.75", "--transfer-gap", "0"], "four-legged phases"),
 ])
 def test_cli_walk_refuses_gaits_that_cannot_be_planned(tmp_path: Path, arguments: list[str],
@@ -156,8 +156,11 @@ def test_cli_walk_refuses_gaits_that_cannot_be_planned(tmp_path: Path, arguments
     result = runner.invoke(app, ["robot", "walk", "--no-video", "-o", str(tmp_path / "w"),
                                  *arguments])
     assert result.exit_code == 2
-    assert message in " ".join(result.output.split())
+    shown = " ".join(result.output.replace("│", " ").split())
+    assert message in shown
+    assert "--duty-factor, --lift-fraction, --transfer-gap or --margin" in shown
     assert "Traceback" not in result.output
+    assert not (tmp_path / "w").exists()  # refused before a run folder is made
 
 
 def test_cli_leg_validate_writes_a_run_folder(tmp_path: Path) -> None:

@@ -23,6 +23,9 @@ from pneumaquad.cli.common import (
     option_range,
     progress_bar,
 )
+from pneumaquad.cli.settings import option_names, settings_options
+from pneumaquad.locomotion.walk_run import WALK_SETTINGS
+from pneumaquad.locomotion.walking import WalkSettings
 from pneumaquad.params import JOINT_NAMES, load_robot
 from pneumaquad.params.schema import Bounds
 
@@ -60,16 +63,29 @@ def _simulation(params: str, overrides: list[str] | None, configuration: str,
     return RobotSimulation(robot, supply=supply)
 
 
+def _progress(update: Callable[[int, int], None]) -> Callable[[float, float], None]:
+    """A run's progress in simulated seconds for the progress bar (in milliseconds)."""
+    return lambda done, total: update(int(done * 1000), int(total * 1000))
+
+
 def _run(simulation, phases, folder_option: Path | None, kind: str, description: str,
          video: bool, joints: list[str] | None = None) -> Path:
-    from pneumaquad.io.recording import create_run_folder
-    from pneumaquad.reporting.robot_plots import plot_body, plot_joints
+    from pneumaquad.io.run_folder import create_run_folder
     from pneumaquad.robot.experiment import run_phases
 
     folder = create_run_folder(folder_option, kind)
     with progress_bar(kind) as update:
-        run = run_phases(simulation, phases, folder, description,
-                         lambda done, total: update(int(done * 1000), int(total * 1000)))
+        run = run_phases(simulation, phases, folder, description, _progress(update))
+    _report(simulation, run, description, video, joints)
+    return folder
+
+
+def _report(simulation, run, description: str, video: bool,
+            joints: list[str] | None = None) -> None:
+    """Plots, video and key figures of a finished robot run; exit 130 if interrupted."""
+    from pneumaquad.reporting.robot_plots import plot_body, plot_joints
+
+    folder = run.folder
     robot = simulation.robot
     leg_joints = joints or [n for n in robot.joint_names if n.startswith("front_right")]
     if run.recording["time [s]"].size > 1:
@@ -98,7 +114,6 @@ def _run(simulation, phases, folder_option: Path | None, kind: str, description:
                           highlight=False)
     if summary.get("interrupted"):
         finish_run(folder, summary)
-    return folder
 
 
 def _check_environment(environment: str) -> None:
@@ -150,7 +165,7 @@ def leg_validate(
     With ``all`` for the joint and/or the signal, every combination runs, each in its own
     sub-folder of the output folder (``<joint>-<signal>``).
     """
-    from pneumaquad.io.recording import create_run_folder
+    from pneumaquad.io.run_folder import create_run_folder
     from pneumaquad.robot.scenarios import LEG_SIGNALS, leg_validation_phases
 
     if joint not in (*JOINT_NAMES, "all"):
@@ -234,43 +249,9 @@ def robot_stand(
 
 
 @robot_app.command("walk")
+@settings_options(WalkSettings, WALK_SETTINGS)
 def robot_walk(
-    distance: Annotated[float, typer.Option(help="Distance to walk [m], 0.01 to 100.",
-                                            callback=_within(0.01, 100.0, "m"))] = 1.0,
-    speed: Annotated[float, typer.Option(help="Body speed [m/s], 0.001 to 1.",
-                                         callback=_within(0.001, 1.0, "m/s"))] = 0.02,
-    heading: Annotated[float, typer.Option(
-        help="Walking direction, CCW from forward [deg], -360 to 360.",
-        callback=_within(-360.0, 360.0, "deg"))] = 0.0,
-    duty_factor: Annotated[float, typer.Option(help="Stance fraction, 0.75 to 0.99.",
-                                               callback=_within(0.75, 0.99))] = 0.9,
-    period: Annotated[float, typer.Option(help="Gait cycle [s], 0.5 to 600.",
-                                          callback=_within(0.5, 600.0, "s"))] = 8.0,
-    margin: Annotated[float, typer.Option(help="Planned static margin [m], 0 to 1.",
-                                          callback=_within(0.0, 1.0, "m"))] = 0.06,
-    step_height: Annotated[float, typer.Option(help="Foot lift at mid-swing [m], 0 to 0.5.",
-                                               callback=_within(0.0, 0.5, "m"))] = 0.04,
-    lift_fraction: Annotated[float, typer.Option(
-        callback=_within(0.0, 0.49), help="Share of the swing, at each end, spent only "
-        "lifting or lowering the foot, 0 to 0.49.")] = 0.25,
-    transfer_gap: Annotated[float, typer.Option(
-        callback=_within(0.0, 0.5), help="Cycle fraction with four feet down between a rear "
-        "touchdown and the front lift-off (load transfer), 0 to 0.5.")] = 0.04,
-    stance_control: Annotated[bool, typer.Option(
-        "--stance-control/--no-stance-control",
-        help="Force-controlled stance: each stance leg's cylinders track the load "
-             "statics gives it (locomotion.stance_control); off: plain position control.")]
-    = True,
-    force_gain: Annotated[float, typer.Option(
-        callback=_within(1e-6, 1.0, "V/N"),
-        help="Force tracking gain of the stance cylinders [V/N], 1e-6 to 1.")] = 0.015,
-    swing_from_ground: Annotated[bool, typer.Option(
-        "--swing-from-ground/--swing-from-body",
-        help="Swing height above the ground at lift-off (locomotion.swing_control), or "
-             "relative to the body as planned.")] = True,
-    heading_hold: Annotated[bool, typer.Option(
-        "--heading-hold/--no-heading-hold",
-        help="Hold the initial heading (locomotion.heading_control).")] = True,
+    settings: WalkSettings,
     environment: EnvironmentOption = "flat",
     seed: SeedOption = 0,
     params: RobotParamsOption = "crr-quadruped",
@@ -280,59 +261,27 @@ def robot_walk(
 ) -> None:
     """The quadruped stands up and walks a statically stable crawl (lateral-sequence wave
     gait, duty factor >= 0.75); reports success or failure with the reason."""
-    import json
-    import math
-
-    from pneumaquad.locomotion.stance_control import StanceControlSettings
-    from pneumaquad.locomotion.walking import WalkSettings, walking_outcome, walking_phases
+    from pneumaquad.locomotion.walk_run import WalkSettingsError, run_walk
 
     _check_environment(environment)
+    distance, speed = settings.distance, settings.speed
     if distance / speed > MAX_SIMULATED_TIME:
         raise typer.BadParameter(
             f"walking {distance:g} m at {speed:g} m/s takes {distance / speed:.4g} s; expected "
             f"at most {MAX_SIMULATED_TIME:g} s of walking", param_hint="--distance / --speed")
-    largest_gap = 2.0 * duty_factor - 1.5
-    if transfer_gap > largest_gap + 1e-12:
-        raise typer.BadParameter(
-            f"{transfer_gap:g} does not fit: a side's two swings and the gap take "
-            f"2·(1 − duty factor) + gap ≤ 0.5 of the cycle, so with duty factor "
-            f"{duty_factor:g} the gap is at most {max(largest_gap, 0.0):.3g}",
-            param_hint="--transfer-gap")
-    stance = StanceControlSettings(force_gain=force_gain) if stance_control else None
-    settings = WalkSettings(speed=speed, heading=math.radians(heading),
-                            duty_factor=duty_factor, period=period, minimum_margin=margin,
-                            distance=distance, step_height=step_height,
-                            lift_fraction=lift_fraction, transfer_gap=transfer_gap,
-                            swing_from_ground=swing_from_ground,
-                            heading_hold=heading_hold, stance_control=stance)
     simulation = _simulation(params, overrides, "quadruped", environment, seed)
+    kind = f"walk-{environment}"
     try:
-        phases, plan = walking_phases(simulation, settings)
-    except ValueError as error:  # settings the gait cannot meet (no sway window, margin)
-        raise typer.BadParameter(f"the gait cannot be planned: {error}",
-                                 param_hint="--duty-factor, --margin or --transfer-gap"
-                                 ) from None
-    folder = _run(simulation, phases, output, f"walk-{environment}",
-                  f"quadruped: walk {distance:g} m on {environment}", video)
-    from pneumaquad.io.recording import read_recording
-    from pneumaquad.locomotion.walking import tip_over_series
-    from pneumaquad.reporting.robot_plots import plot_walking
-
-    summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-    recording = read_recording(folder)
-    if "walk" not in summary["phases"]:
+        with progress_bar(kind) as update:
+            walk = run_walk(simulation, settings, output, progress=_progress(update))
+    except WalkSettingsError as error:  # out of range, or a gait that cannot be planned
+        raise typer.BadParameter(str(error), param_hint=option_names(WALK_SETTINGS,
+                                                                     error.fields)) from None
+    _report(simulation, walk.run, walk.run.summary["description"], video)
+    outcome = walk.outcome
+    if outcome is None:
         console.print("walking: not judged (the run stopped before the walk began)")
         return
-    tip_over = tip_over_series(recording, summary, simulation.robot, plan)
-    outcome = walking_outcome(recording, summary, settings, simulation.robot, tip_over)
-    plot_walking(recording, simulation.robot.legs, folder / "walking.png", tip_over,
-                 f"walk {distance:g} m on {environment}")
-    outcome["planned smallest static margin [m]"] = float(plan.margins.min())
-    outcome["planned unreachable IK samples [count]"] = int(
-        sum(plan.cycle.unreachable_counts.values()))
-    summary["walking"] = outcome
-    (folder / "summary.json").write_text(json.dumps(summary, indent=2, default=str),
-                                         encoding="utf-8")
     verdict = "success" if outcome["success"] else "failure"
     console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
                   f"travelled {outcome['distance travelled [m]']:.3f} m of {distance:g} m, "

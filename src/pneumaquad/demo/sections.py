@@ -118,26 +118,16 @@ def _foot_cycle(folder: Path, report: Report) -> None:
 
 
 def _walk(folder: Path, report: Report) -> None:
-    from pneumaquad.io.run_folder import RunFolderWriter
-    from pneumaquad.locomotion.walking import (
-        WalkSettings,
-        tip_over_series,
-        walking_outcome,
-        walking_phases,
-    )
-    from pneumaquad.reporting.robot_plots import plot_walking
+    from pneumaquad.locomotion.walk_run import run_walk
+    from pneumaquad.locomotion.walking import WalkSettings
 
-    simulation = _simulation("quadruped")
     settings = WalkSettings(distance=0.32)  # two 8 s cycles at 20 mm/s
-    phases, plan = walking_phases(simulation, settings)
-    run = run_phases(simulation, phases, folder / "robot-walk", "quadruped: crawl 0.32 m")
-    tip_over = tip_over_series(run.recording, run.summary, simulation.robot, plan)
-    outcome = walking_outcome(run.recording, run.summary, settings, simulation.robot,
-                              tip_over)
-    RunFolderWriter(folder / "robot-walk").update_summary({"walking": outcome})
-    figure = plot_walking(run.recording, simulation.robot.legs,
-                          folder / "robot-walk" / "walking.png", tip_over,
-                          "Crawl gait on flat ground (two cycles)")
+    walk = run_walk(_simulation("quadruped"), settings, folder / "robot-walk",
+                    "quadruped: crawl 0.32 m",
+                    figure_title="Crawl gait on flat ground (two cycles)")
+    outcome, figure = walk.outcome, walk.figure
+    if outcome is None or figure is None:
+        raise RuntimeError(f"the demo walk in {walk.folder} was not judged (interrupted?)")
     verdict = "success" if outcome["success"] else "failure"
     report.add(
         "Quadruped: crawl gait (lateral-sequence wave gait, duty factor 0.9)",

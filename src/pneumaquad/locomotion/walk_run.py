@@ -1,0 +1,202 @@
+"""A judged walk: the crawl gait played on the robot, written to a run folder and judged.
+
+:func:`run_walk` is the one call behind ``pneumaquad robot walk`` and the demo's walk: it
+checks the settings against :data:`WALK_SETTINGS` and plans the gait
+(:func:`.walking.walking_phases`; settings out of range or that the gait cannot meet raise
+:class:`WalkSettingsError` naming the fields), creates the run folder and plays the phases
+(:func:`pneumaquad.robot.experiment.run_phases`), judges the walk
+(:func:`.walking.walking_outcome`, with the tip-over margin and the plan's own margin and
+reach), draws ``walking.png`` and adds the judgement to ``summary.json`` under
+``"walking"`` through :class:`pneumaquad.io.run_folder.RunFolderWriter`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pneumaquad.io.run_folder import RunFolderWriter, create_run_folder
+from pneumaquad.params.schema import Bounds
+from pneumaquad.params.settings import Setting, check_settings
+from pneumaquad.reporting.robot_plots import plot_walking
+from pneumaquad.robot.experiment import Phase, RobotRun, run_phases
+from pneumaquad.robot.simulation import RobotSimulation
+
+from .walk import WalkPlan
+from .walking import WalkSettings, tip_over_series, walking_outcome, walking_phases
+
+__all__ = ["GAIT_FIELDS", "WALKING_FIGURE", "WALK_SETTINGS", "JudgedWalk", "WalkSettingsError",
+           "check_walk_settings", "plan_walking", "run_walk"]
+
+#: The walking figure of a judged walk's run folder.
+WALKING_FIGURE = "walking.png"
+
+
+def _closed(lower: float, upper: float, unit: str = "") -> Bounds:
+    return Bounds(lower, upper, unit, lower_inclusive=True)
+
+
+#: What each field of :class:`.walking.WalkSettings` sets and the values it takes; the
+#: ``robot walk`` options are built from these and the dataclass's defaults.
+WALK_SETTINGS: dict[str, Setting] = {
+    "distance": Setting("Distance to walk", _closed(0.01, 100.0, "m")),
+    "speed": Setting("Body speed", _closed(0.001, 1.0, "m/s")),
+    "heading": Setting("Walking direction, counter-clockwise from forward",
+                       _closed(-360.0, 360.0, "deg"), scale=math.pi / 180.0),
+    "duty_factor": Setting("Stance fraction of the gait cycle", _closed(0.75, 0.99)),
+    "period": Setting("Gait cycle", _closed(0.5, 600.0, "s")),
+    "minimum_margin": Setting("Planned static margin", _closed(0.0, 1.0, "m"),
+                              option="margin"),
+    "step_height": Setting("Foot lift at mid-swing", _closed(0.0, 0.5, "m")),
+    "lift_fraction": Setting("Share of the swing, at each end, spent only lifting or "
+                             "lowering the foot", _closed(0.0, 0.49)),
+    "transfer_gap": Setting("Cycle fraction with four feet down between a rear touchdown "
+                            "and the front lift-off (load transfer)", _closed(0.0, 0.5)),
+    "stance_control": Setting(
+        "Force-controlled stance: each stance leg's cylinders track the load statics gives "
+        "it (locomotion.stance_control); off: plain position control",
+        nested={"force_gain": Setting("Force tracking gain of the stance cylinders",
+                                      _closed(1e-6, 1.0, "V/N"))}),
+    "swing_from_ground": Setting("Swing height above the ground at lift-off "
+                                 "(locomotion.swing_control), or relative to the body as "
+                                 "planned", off_option="swing-from-body"),
+    "heading_hold": Setting("Hold the initial heading (locomotion.heading_control)"),
+}
+
+#: The settings the gait's own checks (:class:`pneumaquad.gait.crawl.CrawlGait`,
+#: :func:`pneumaquad.gait.crawl.sway_for_margin`) weigh against each other.
+GAIT_FIELDS = ("duty_factor", "lift_fraction", "transfer_gap", "minimum_margin")
+
+
+class WalkSettingsError(ValueError):
+    """Walk settings out of range, or that the gait cannot meet.
+
+    Attributes
+    ----------
+    fields : tuple of str
+        The :class:`.walking.WalkSettings` fields concerned.
+    """
+
+    def __init__(self, message: str, fields: tuple[str, ...]) -> None:
+        super().__init__(message)
+        self.fields = fields
+
+
+@dataclass
+class JudgedWalk:
+    """Outcome of :func:`run_walk`.
+
+    Attributes
+    ----------
+    run : RobotRun
+        The run (recording, summary with ``"walking"``, folder).
+    plan : WalkPlan
+        The planned references.
+    outcome : dict or None
+        The judgement (:func:`.walking.walking_outcome` plus the planned smallest static
+        margin and unreachable IK samples); None when the run was interrupted or stopped
+        before the walk began.
+    figure : Path or None
+        ``walking.png`` of a judged walk.
+    """
+
+    run: RobotRun
+    plan: WalkPlan
+    outcome: dict[str, Any] | None
+    figure: Path | None
+
+    @property
+    def folder(self) -> Path:
+        """The run folder."""
+        return self.run.folder
+
+
+def check_walk_settings(settings: WalkSettings) -> None:
+    """Check every field of ``settings`` against its range in :data:`WALK_SETTINGS`.
+
+    Raises
+    ------
+    WalkSettingsError
+        Naming the field, the value and the range.
+    """
+    for name, description in WALK_SETTINGS.items():
+        try:
+            check_settings(settings, {name: description})
+        except ValueError as error:
+            raise WalkSettingsError(str(error), (name,)) from None
+
+
+def plan_walking(simulation: RobotSimulation,
+                 settings: WalkSettings) -> tuple[list[Phase], WalkPlan]:
+    """:func:`.walking.walking_phases` after :func:`check_walk_settings`.
+
+    Raises
+    ------
+    WalkSettingsError
+        For a field out of range, or settings the gait refuses (its message, with the
+        values of :data:`GAIT_FIELDS`).
+    """
+    check_walk_settings(settings)
+    try:
+        return walking_phases(simulation, settings)
+    except ValueError as error:
+        raise WalkSettingsError(
+            f"the gait cannot be planned with duty factor {settings.duty_factor:g}, lift "
+            f"fraction {settings.lift_fraction:g}, transfer gap {settings.transfer_gap:g} "
+            f"and a static margin of {settings.minimum_margin:g} m: {error}",
+            GAIT_FIELDS) from None
+
+
+def run_walk(
+    simulation: RobotSimulation,
+    settings: WalkSettings,
+    output: Path | None = None,
+    description: str | None = None,
+    progress: Callable[[float, float], None] | None = None,
+    figure_title: str | None = None,
+) -> JudgedWalk:
+    """Stand up, walk, stop; write the run folder and judge the walk (module docstring).
+
+    Parameters
+    ----------
+    simulation : RobotSimulation
+        The free quadruped.
+    settings : WalkSettings
+    output : Path, optional
+        Run folder; default ``runs/walk-<environment>-<time>``. Nothing is created when the
+        settings are refused.
+    description : str, optional
+        For the summary; default ``"quadruped: walk <distance> m on <environment>"``.
+    progress : callable, optional
+        Called with (simulated time, total time) [s] as the run goes.
+    figure_title : str, optional
+        Title of ``walking.png``.
+
+    Raises
+    ------
+    WalkSettingsError
+        Before anything runs (:func:`plan_walking`).
+    SimulationDivergedError
+        After writing the run folder, when the simulation diverged (not judged).
+    """
+    phases, plan = plan_walking(simulation, settings)
+    robot = simulation.robot
+    where = f"{settings.distance:g} m on {robot.environment}"
+    folder = create_run_folder(output, f"walk-{robot.environment}")
+    run = run_phases(simulation, phases, folder, description or f"quadruped: walk {where}",
+                     progress)
+    if run.interrupted or "walk" not in run.summary["phases"]:
+        return JudgedWalk(run, plan, None, None)
+    tip_over = tip_over_series(run.recording, run.summary, robot, plan)
+    outcome = walking_outcome(run.recording, run.summary, settings, robot, tip_over)
+    outcome["planned smallest static margin [m]"] = float(plan.margins.min())
+    outcome["planned unreachable IK samples [count]"] = int(
+        sum(plan.cycle.unreachable_counts.values()))
+    figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
+                          figure_title or f"walk {where}")
+    RunFolderWriter(folder).update_summary({"walking": outcome})
+    run.summary["walking"] = outcome
+    return JudgedWalk(run, plan, outcome, figure)
