@@ -147,7 +147,8 @@ def jsonable(value: Any, where: str = "value") -> Any:
         return str(value)
     if value is None or isinstance(value, (str, int, bool)):
         return value
-    raise TypeError(f"{where}: a {type(value).__name__} is not a JSON value")
+    raise TypeError(f"{where}: {value!r} (of type {type(value).__name__}) is not a JSON "
+                    "value (numbers, strings, booleans, lists, tables, None)")
 
 
 def json_text(document: Mapping[str, Any]) -> str:
