@@ -276,18 +276,20 @@ def _active_states(p: np.void) -> np.ndarray:
 
 class _Scratch(NamedTuple):
     """Buffers of the right-hand side: a state record and its rates (arrays of one
-    ACTUATOR_STATE_DTYPE record) with their float views (the solver's vectors)."""
+    ACTUATOR_STATE_DTYPE record) with their float views (the solver's vectors) and the
+    rates' record."""
 
     state: np.ndarray
     values: np.ndarray
     rates: np.ndarray
     rate_values: np.ndarray
+    rate_record: np.void
 
 
 def _new_scratch() -> _Scratch:
     state = np.zeros(1, ACTUATOR_STATE_DTYPE)
     rates = np.zeros(1, ACTUATOR_STATE_DTYPE)
-    return _Scratch(state, float_view(state)[0], rates, float_view(rates)[0])
+    return _Scratch(state, float_view(state)[0], rates, float_view(rates)[0], rates[0])
 
 
 def _evaluate(params, command, supply_pressure, scratch: _Scratch) -> np.ndarray:
@@ -336,23 +338,32 @@ def _drawn_mass(params, full_state, active, times, values, command, supply_press
     for index in range(times.size):
         scratch.values[active] = values[:, index]
         _evaluate(params, command, supply_pressure, scratch)
-        rates[index] = scratch.rates[0]["air_consumed"]
+        rates[index] = scratch.rate_record["air_consumed"]
     return float(np.sum(0.5 * (rates[1:] + rates[:-1]) * np.diff(times)))
 
 
 @compiled
-def reference_row(params, state, before, supply, outputs, control_step, drawn, records,
-                  index, sample_time, command, reference):
-    """Outputs of a control interval the adaptive solver integrated, and its recording
-    row ``index`` (:func:`write_row`).
+def finish_reference_interval(params, state, before, supply, outputs, control_step, consumed,
+                              records, index, sample_time, command, reference):
+    """Bookkeeping of a control interval the adaptive solver integrated: the air it
+    consumed, the supply's draw, the outputs and recording row ``index``
+    (:func:`write_row`).
 
     ``params``, ``state`` (after the interval), ``before`` (the state before it),
-    ``supply`` and ``outputs`` are arrays of one record; ``drawn`` is the mass drawn from
-    the supply over the interval [kg].
+    ``supply`` and ``outputs`` are arrays of one record; ``consumed`` is the air the
+    cylinder drew over the interval [kg] (the solver does not integrate it), added to
+    the state's ``air_consumed`` and drawn from the supply (an isothermal tank loses
+    R·T·m/V).
     """
     p = params[0]
     s = state[0]
     out = outputs[0]
+    tank = supply[0]
+    s.air_consumed += consumed
+    drawn = s.air_consumed - before[0].air_consumed
+    tank.drawn_mass += drawn
+    if tank.model == SUPPLY_TANK:
+        tank.tank_pressure -= tank.gas_constant * tank.tank_temperature * drawn / tank.tank_volume
     clear_outputs(out)
     out.cap_mass_flow = s.cap_mass - before[0].cap_mass
     out.rod_mass_flow = s.rod_mass - before[0].rod_mass
@@ -399,7 +410,7 @@ def simulate_rig_reference(
     state = rig_initial_state(setup, params)
     y = float_view(state)[0]  # the solver's view of the state record
     supply = supply_state(setup.actuator)
-    tank = supply[0]
+    record = state[0]  # the state record (a view), for reading fields by name
     gains = rig_controller_gains(setup)
     controller = new_pid_state()
     scratch = _new_scratch()
@@ -423,7 +434,7 @@ def simulate_rig_reference(
                     break
                 if closed_loop:
                     reference = float(signal[k])
-                    command = pid_update(gains, controller, reference, state[0]["position"], dt)
+                    command = pid_update(gains, controller, reference, record["position"], dt)
                 else:
                     reference = math.nan
                     command = float(signal[k])
@@ -459,20 +470,13 @@ def simulate_rig_reference(
                     raise ReferenceSolverError(
                         f"solve_ivp failed at t = {k * dt:.4f} s: {solution.message}"
                     )
-                state[0]["air_consumed"] += _drawn_mass(
+                consumed = _drawn_mass(
                     params, y, active, solution.t, solution.y, command, supply_pressure,
                     scratch,
                 )
                 y[active] = solution.y[:, -1]
-                drawn = state[0]["air_consumed"] - before[0]["air_consumed"]
-                tank["drawn_mass"] += drawn
-                if tank["model"] == SUPPLY_TANK:
-                    tank["tank_pressure"] -= (
-                        tank["gas_constant"] * tank["tank_temperature"] * drawn
-                        / tank["tank_volume"]
-                    )
-                reference_row(params, state, before, supply, outputs, dt, drawn, records, k,
-                              (k + 1) * dt, command, reference)
+                finish_reference_interval(params, state, before, supply, outputs, dt, consumed,
+                                          records, k, (k + 1) * dt, command, reference)
                 found = first_non_finite(rows[k : k + 1], skipped)
                 if found is not None:
                     stop_diverged(recorder, rows, flushed, k, RIG_COLUMNS[found[1]],
