@@ -47,4 +47,5 @@ bench: setup
 	$(BIN)/python benchmarks/cost_table.py
 	$(BIN)/python benchmarks/robot_speed.py
 	$(BIN)/python benchmarks/network_latency.py
+	$(BIN)/python benchmarks/gym_speed.py
 	$(BIN)/pneumaquad report --cost-table --output runs/bench-cost-table

@@ -8,7 +8,8 @@ The few names most work starts from are available here; each is loaded on first 
 - the 1-DoF rig: :func:`simulate_rig` and the reference signals in :mod:`signals`;
 - the robot: :func:`build_robot` (MuJoCo model on the 12 cylinders) and
   :class:`RobotSimulation` (the coupled actuator + MuJoCo step);
-- results: :func:`read_recording` (a recording file or a run folder's recording).
+- results: :func:`read_run_folder` (recording, parameters and summary of a run folder)
+  and :func:`read_recording` (a recording file or a run folder's recording).
 
 Everything else lives in the layers listed in the README's "Layout".
 """
@@ -32,7 +33,8 @@ _PUBLIC = {
     "signals": "pneumaquad.rig.signals",
     "build_robot": "pneumaquad.robot.builder",
     "RobotSimulation": "pneumaquad.robot.simulation",
-    "read_recording": "pneumaquad.io.recording",
+    "read_run_folder": "pneumaquad.io.run_folder",
+    "read_recording": "pneumaquad.io.run_folder",
 }
 
 __all__ = ["__version__", *_PUBLIC]
