@@ -12,6 +12,9 @@ ground), the static stability margin of a crawl gait.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import NamedTuple
+
 import mujoco
 import numpy as np
 
@@ -20,42 +23,132 @@ from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
 
 from .simulation import RobotSimulation
 
-__all__ = ["JOINT_QUANTITIES", "recording_columns", "recording_row", "thorax_attitude"]
+__all__ = [
+    "BODY_COLUMNS",
+    "FOOT_COLUMNS",
+    "JOINT_COLUMNS",
+    "JOINT_QUANTITIES",
+    "Column",
+    "RowSources",
+    "recording_columns",
+    "recording_row",
+    "thorax_attitude",
+]
 
-#: Per-joint quantities, in column order.
-JOINT_QUANTITIES = (
-    "reference [rad]",
-    "angle [rad]",
-    "angular velocity [rad/s]",
-    "piston reference [m]",
-    "piston position [m]",
-    "piston velocity [m/s]",
-    "command [V]",
-    "cap pressure [Pa]",
-    "rod pressure [Pa]",
-    "force [N]",
-    "air consumed [kg]",
-    "control mode [-]",
-    "force set-point [N]",
+
+class RowSources(NamedTuple):
+    """What a row's columns are read from: the simulation, the joint-angle references
+    of the row [rad], and readouts that several columns share, taken once per row."""
+
+    simulation: RobotSimulation
+    reference_angles: np.ndarray
+    foot_positions: np.ndarray  # (legs, 3) [m]
+    foot_forces: np.ndarray  # (legs,) [N]
+    attitude: np.ndarray  # thorax roll, pitch, yaw [rad]
+
+
+class Column(NamedTuple):
+    """One recorded quantity: its name, its SI unit and where its value comes from.
+
+    ``source`` returns one value for a body column, one per joint for a joint column
+    and one per leg for a foot column. The header ``quantity [unit]`` and the row are
+    both produced from these tables, so adding a column is one line here.
+    """
+
+    quantity: str
+    unit: str
+    source: Callable[[RowSources], np.ndarray | float]
+
+    @property
+    def header(self) -> str:
+        return f"{self.quantity} [{self.unit}]"
+
+
+def _force_set_point(row: RowSources) -> np.ndarray:
+    s = row.simulation
+    return np.where(s.joint_control["force_tracking_gain"] > 0.0, s.force_reference, np.nan)
+
+
+def _normal_litres(row: RowSources) -> float:
+    """Air drawn [NL]: its mass at normal conditions (ISO 8778), in litres."""
+    s = row.simulation
+    gas_constant = s.params[0]["gas_constant"]
+    return s.air_consumed() * gas_constant * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
+
+
+def _margin(row: RowSources) -> float:
+    centre = row.simulation.data.subtree_com[0, :2]
+    return loaded_support(row.foot_positions, row.foot_forces, centre)[1]
+
+
+#: Per joint, in column order; headers start with the joint name.
+JOINT_COLUMNS: tuple[Column, ...] = (
+    Column("reference", "rad", lambda row: row.reference_angles),
+    Column("angle", "rad",
+           lambda row: row.simulation.data.qpos[row.simulation.robot.qpos_address]),
+    Column("angular velocity", "rad/s",
+           lambda row: row.simulation.data.qvel[row.simulation.robot.dof_address]),
+    Column("piston reference", "m", lambda row: row.simulation.reference_positions),
+    Column("piston position", "m", lambda row: row.simulation.positions),
+    Column("piston velocity", "m/s", lambda row: row.simulation.velocities),
+    Column("command", "V", lambda row: row.simulation.commands),
+    Column("cap pressure", "Pa", lambda row: row.simulation.state["cap_pressure"]),
+    Column("rod pressure", "Pa", lambda row: row.simulation.state["rod_pressure"]),
+    Column("force", "N", lambda row: row.simulation.outputs["pneumatic_force"]),
+    Column("air consumed", "kg", lambda row: row.simulation.state["air_consumed"]),
+    Column("control mode", "-", lambda row: row.simulation.joint_control["mode"]),
+    Column("force set-point", "N", _force_set_point),
 )
-_THORAX = ("thorax x [m]", "thorax y [m]", "thorax z [m]", "thorax roll [rad]",
-           "thorax pitch [rad]", "thorax yaw [rad]")
-_SUPPLY = ("supply pressure [Pa]", "air consumed [kg]", "air consumed [NL]")
-_BALANCE = ("centre of mass x [m]", "centre of mass y [m]", "stability margin [m]")
+
+#: Per leg, in column order; headers start with the leg name.
+FOOT_COLUMNS: tuple[Column, ...] = (
+    Column("foot x", "m", lambda row: row.foot_positions[:, 0]),
+    Column("foot y", "m", lambda row: row.foot_positions[:, 1]),
+    Column("foot z", "m", lambda row: row.foot_positions[:, 2]),
+    Column("foot normal force", "N", lambda row: row.foot_forces),
+)
+
+
+def _thorax(axis: int) -> Callable[[RowSources], float]:
+    return lambda row: row.simulation.data.xpos[row.simulation.robot.thorax_id][axis]
+
+
+def _attitude(axis: int) -> Callable[[RowSources], float]:
+    return lambda row: row.attitude[axis]
+
+
+#: Thorax, supply and balance, after the joints, and the feet after the thorax.
+THORAX_COLUMNS: tuple[Column, ...] = (
+    Column("thorax x", "m", _thorax(0)),
+    Column("thorax y", "m", _thorax(1)),
+    Column("thorax z", "m", _thorax(2)),
+    Column("thorax roll", "rad", _attitude(0)),
+    Column("thorax pitch", "rad", _attitude(1)),
+    Column("thorax yaw", "rad", _attitude(2)),
+)
+BODY_COLUMNS: tuple[Column, ...] = (
+    Column("supply pressure", "Pa", lambda row: row.simulation.supply_pressure()),
+    Column("air consumed", "kg", lambda row: row.simulation.air_consumed()),
+    Column("air consumed", "NL", _normal_litres),
+    Column("centre of mass x", "m", lambda row: row.simulation.data.subtree_com[0, 0]),
+    Column("centre of mass y", "m", lambda row: row.simulation.data.subtree_com[0, 1]),
+    Column("stability margin", "m", _margin),
+)
+
+#: Per-joint headers without the joint name (``"angle [rad]"`` …), in column order.
+JOINT_QUANTITIES: tuple[str, ...] = tuple(column.header for column in JOINT_COLUMNS)
 
 
 def recording_columns(simulation: RobotSimulation) -> tuple[str, ...]:
-    """Column names of a robot run's recording."""
+    """Column names of a robot run's recording: time, per joint, thorax, per leg, body."""
     robot = simulation.robot
     columns = ["time [s]"]
     for joint in robot.joint_names:
-        columns += [f"{joint} {quantity}" for quantity in JOINT_QUANTITIES]
-    columns += list(_THORAX)
+        columns += [f"{joint} {column.header}" for column in JOINT_COLUMNS]
+    columns += [column.header for column in THORAX_COLUMNS]
     for leg in robot.legs:
-        columns += [f"{leg} foot x [m]", f"{leg} foot y [m]", f"{leg} foot z [m]",
-                    f"{leg} foot normal force [N]"]
-    columns += list(_SUPPLY)
-    columns += list(_BALANCE)
+        columns += [f"{leg} {column.header}" for column in FOOT_COLUMNS]
+    columns += [column.header for column in BODY_COLUMNS]
     return tuple(columns)
 
 
@@ -78,35 +171,15 @@ def thorax_attitude(simulation: RobotSimulation) -> np.ndarray:
 
 
 def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> np.ndarray:
-    """One recording row (layout of :func:`recording_columns`) of the current state."""
-    s = simulation
-    robot = s.robot
-    per_joint = np.column_stack(
-        [
-            reference_angles,
-            s.data.qpos[robot.qpos_address],
-            s.data.qvel[robot.dof_address],
-            s.reference_positions,
-            s.positions,
-            s.velocities,
-            s.commands,
-            s.state["cap_pressure"],
-            s.state["rod_pressure"],
-            s.outputs["pneumatic_force"],
-            s.state["air_consumed"],
-            s.joint_control["mode"],
-            np.where(s.joint_control["force_tracking_gain"] > 0.0, s.force_reference, np.nan),
-        ]
-    ).ravel()
-    thorax = np.concatenate([s.data.xpos[robot.thorax_id], thorax_attitude(s)])
-    foot_positions = s.foot_positions()
-    foot_forces = s.foot_normal_forces()
-    feet = np.column_stack([foot_positions, foot_forces]).ravel()
-    air = s.air_consumed()
-    gas_constant = s.params[0]["gas_constant"]
-    normal_litres = air * gas_constant * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
-    supply = np.array([s.supply_pressure(), air, normal_litres])
-    com = s.data.subtree_com[0, :2]
-    _, margin = loaded_support(foot_positions, foot_forces, com)
-    balance = np.array([com[0], com[1], margin])
-    return np.concatenate([[s.time], per_joint, thorax, feet, supply, balance])
+    """One recording row (layout of :func:`recording_columns`) of the current state.
+
+    ``reference_angles`` [rad] are the joint-angle references recorded with the row
+    (the simulation's own, or a planned trajectory's sample).
+    """
+    row = RowSources(simulation, reference_angles, simulation.foot_positions(),
+                     simulation.foot_normal_forces(), thorax_attitude(simulation))
+    per_joint = np.column_stack([column.source(row) for column in JOINT_COLUMNS]).ravel()
+    thorax = np.array([column.source(row) for column in THORAX_COLUMNS], dtype=float)
+    feet = np.column_stack([column.source(row) for column in FOOT_COLUMNS]).ravel()
+    body = np.array([column.source(row) for column in BODY_COLUMNS], dtype=float)
+    return np.concatenate([[simulation.time], per_joint, thorax, feet, body])
