@@ -65,7 +65,7 @@ def test_step_run_writes_folder(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "fragment"),
     [
-        (("rig", "step", "6 kg"), "VOLTAGE: '6 kg' has dimension [mass]"),
+        (("rig", "step", "6 kg"), "VOLTAGE: '6 kg' is a mass"),
         (("rig", "step", "12 V"), "VOLTAGE"),
         (
             ("rig", "step", "6 V", "--set", 'supply.supply_pressure="50 kg"'),

@@ -140,7 +140,7 @@ def test_mass_bookkeeping_and_shared_tank() -> None:
     overrides = (
         'supply.model="tank"',
         'supply.tank_volume="0.2 L"',
-        'supply.tank_initial_pressure="20 bar"',
+        'supply.tank_initial_pressure="20 bara"',
     )
     actuators = [
         actuator_setup(name, *overrides) for name in ("crr-alpha", "crr-beta", "crr-gamma")

@@ -168,7 +168,7 @@ def test_packing_fills_every_field(name: str, supply: str) -> None:
     writes every output field."""
     overrides = [f'supply.model="{supply}"']
     if supply == "tank":
-        overrides += ['supply.tank_volume="1 L"', 'supply.tank_initial_pressure="20 bar"',
+        overrides += ['supply.tank_volume="1 L"', 'supply.tank_initial_pressure="20 bara"',
                       'supply.tank_temperature="295 K"']
     actuator = load_actuator(name, overrides)
     params = _blank(layout.ACTUATOR_PARAMETERS_DTYPE)

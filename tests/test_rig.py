@@ -96,7 +96,8 @@ def test_recorded_flows_integrate_to_chamber_masses(valve: str) -> None:
 
 def test_tank_pressure_drop_matches_air_consumed() -> None:
     setup = rig_setup(
-        'supply.model="tank"', 'supply.tank_volume="0.05 L"', 'supply.tank_initial_pressure="5 bar"'
+        'supply.model="tank"', 'supply.tank_volume="0.05 L"',
+        'supply.tank_initial_pressure="5 bara"',
     )
     supply = setup.actuator.supply
     rec = run_rig(setup, varied_commands(setup, 3.0, seed=5), closed_loop=False)

@@ -236,11 +236,12 @@ def test_non_numeric_and_ragged_lines(tmp_path):
 @pytest.mark.parametrize(
     ("entry", "expected"),
     [
-        (("p_cap", "in"), ["cap pressure: unit 'in' is a length unit", "needs a pressure unit"]),
-        (("p_cap", "psi"), ["'psi' is ambiguous", "'psig'", "'psia'"]),
-        (("p_cap", "bar"), ["'bar' is ambiguous", "'barg'", "'bara'"]),
-        (("p_cap", "atm"), ["unknown unit 'atm'", "psig"]),
-        ({"source": "p_cap"}, ["'unit' must be a string"]),
+        (("p_cap", "in"), ["cap pressure: unit 'in' is a length", "expected a pressure"]),
+        (("p_cap", "psi"), ["'psi' does not say gauge or absolute", "'psig'", "'psia'"]),
+        (("p_cap", "bar"), ["'bar' does not say gauge or absolute", "'barg'", "'bara'"]),
+        (("p_cap", "furlong"), ["unit 'furlong' is a length", "psig"]),
+        (("p_cap", "bogus"), ["unit 'bogus' could not be parsed", "psig"]),
+        ({"source": "p_cap"}, ["'unit' must be a unit name"]),
         ({"source": "p_cap", "unit": "psig", "column": 0}, ["1-based"]),
     ],
 )
@@ -263,7 +264,7 @@ def test_mapping_level_problems_are_all_reported():
         )
     problems = caught.value.problems
     assert len(problems) == 4
-    assert any("position: unit 'V' is a voltage unit" in p for p in problems)
+    assert any("position: unit 'V' is a voltage; expected a length" in p for p in problems)
     assert any("unknown quantity 'force'" in p for p in problems)
     assert any("no 'time' entry" in p for p in problems)
     assert any("atmospheric_pressure: -3" in p for p in problems)
@@ -308,3 +309,15 @@ def test_file_level_problems(tmp_path):
     path = tmp_path / "step.csv"
     write_csv(path, lab_columns())
     assert "atmospheric pressure" in error_of(path, MAPPING, atmospheric_pressure=0.0)
+
+
+@pytest.mark.parametrize("unit", ["psig", "psia", "barg", "bara", "kPa", "kPag", "atm", "mm", "in"])
+def test_lab_units_convert_as_parameter_files_do(unit):
+    """One unit system: a lab column in ``unit`` converts like a parameter in ``unit``."""
+    from pneumaquad.io.measured.mapping import to_si
+    from pneumaquad.params.units import convert_quantity
+
+    kind = "length" if unit in {"mm", "in"} else "pressure"
+    atmosphere = 98000.0
+    column = to_si(np.array([2.5]), unit, kind, atmosphere)[0]
+    assert column == convert_quantity(f"2.5 {unit}", kind, atmospheric_pressure=atmosphere)

@@ -301,7 +301,7 @@ def _tank(folder: Path, report: DemoReport) -> None:
     overrides = [
         'supply.model="tank"',
         'supply.tank_volume="0.5 L"',
-        'supply.tank_initial_pressure="8 bar"',
+        'supply.tank_initial_pressure="8 bara"',
     ]
     result, summary = _run(
         folder,

@@ -18,12 +18,14 @@ import pint
 from .errors import ParameterError, Problem
 
 __all__ = [
+    "AMBIGUOUS_UNITS",
     "KINDS",
     "GaugeError",
     "Kind",
     "QuantityError",
     "convert_quantity",
     "parse_quantity",
+    "unit_scale",
     "ureg",
 ]
 
@@ -32,8 +34,13 @@ ureg = pint.UnitRegistry()
 
 if "psia" not in ureg:
     ureg.define("psia = psi")
+if "bara" not in ureg:
+    ureg.define("bara = bar")
 
 _GAUGE_UNITS = {"psig": "psi", "barg": "bar", "kPag": "kPa", "Pag": "Pa", "MPag": "MPa"}
+#: Pressure units used for both gauge and absolute readings in practice: refused alone,
+#: so that every pressure says which it is (the thesis's lab readings were gauge).
+AMBIGUOUS_UNITS = {"psi": ("psig", "psia"), "bar": ("barg", "bara")}
 
 _NUMBER = re.compile(
     r"^\s*([+-]?(?:nan|inf(?:inity)?|(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?))\s*(.*?)\s*$",
@@ -136,6 +143,14 @@ def _parse(text: str) -> pint.Quantity:
     return ureg.parse_expression(text)
 
 
+def _what_it_is(quantity: pint.Quantity) -> str:
+    """``'is a voltage'`` for a quantity of a known kind, else its dimension."""
+    for kind in KINDS.values():
+        if quantity.dimensionality == ureg.Quantity(1.0, kind.si_unit).dimensionality:
+            return f"is {kind.what}"
+    return f"has dimension {quantity.dimensionality}"
+
+
 def convert_quantity(
     value: Any, kind: str | Kind, atmospheric_pressure: float | None = None
 ) -> float:
@@ -159,7 +174,7 @@ def convert_quantity(
     ------
     QuantityError
         With a message to be read after the value, e.g.
-        ``has dimension [mass]; expected a pressure such as "50.3 psig"``.
+        ``is a mass; expected a pressure such as "50.3 psig"``.
     """
     k = kind if isinstance(kind, Kind) else _kind(kind)
     expect = f"expected {k.expectation}"
@@ -173,6 +188,11 @@ def convert_quantity(
         raise QuantityError(f"is not finite; {expect}")
     text, gauge = value, False
     match = _NUMBER.match(value)
+    if match and match.group(2) in AMBIGUOUS_UNITS:
+        gauge_name, absolute_name = AMBIGUOUS_UNITS[match.group(2)]
+        raise QuantityError(
+            f"does not say gauge or absolute; write {gauge_name!r} for a gauge pressure "
+            f"or {absolute_name!r} for an absolute one")
     if match and match.group(2) in _GAUGE_UNITS:
         text, gauge = f"{match.group(1)} {_GAUGE_UNITS[match.group(2)]}", True
     try:
@@ -184,7 +204,7 @@ def convert_quantity(
     try:
         si = q.to(k.si_unit).magnitude
     except pint.DimensionalityError:
-        raise QuantityError(f"has dimension {q.dimensionality}; {expect}") from None
+        raise QuantityError(f"{_what_it_is(q)}; {expect}") from None
     except Exception as exc:
         raise QuantityError(f"could not be converted ({exc}); {expect}") from None
     si = float(si)
@@ -194,7 +214,7 @@ def convert_quantity(
         if atmospheric_pressure is None:
             raise GaugeError(
                 "is a gauge pressure but no valid absolute gas.atmospheric_pressure is "
-                'available to add; use an absolute unit such as "65 psi"'
+                'available to add; use an absolute unit such as "65 psia"'
             )
         si += atmospheric_pressure
     if not math.isfinite(si):
@@ -233,7 +253,7 @@ def parse_quantity(
     ------
     ParameterError
         Naming `key`, the value and the expectation, e.g.
-        ``supply.supply_pressure: '50 kg' has dimension [mass]; expected a pressure
+        ``supply.supply_pressure: '50 kg' is a mass; expected a pressure
         such as "50.3 psig"``.
 
     Examples
@@ -245,3 +265,27 @@ def parse_quantity(
         return convert_quantity(text, expected_dimension, atmospheric_pressure)
     except QuantityError as exc:
         raise ParameterError([Problem(key, text, str(exc))]) from None
+
+
+def unit_scale(unit: str, kind: str | Kind) -> tuple[float, bool]:
+    """SI factor of a unit name and whether it is a gauge pressure.
+
+    The same registry and gauge/absolute rule as the parameter files, for callers that
+    convert whole columns (lab recordings): ``value_SI = value·factor (+ atmosphere if
+    gauge)``. A name the registry does not know is tried once more in lower case, as
+    lab files often write units in capitals (``"PSIG"``, ``"MM"``).
+
+    Raises
+    ------
+    QuantityError
+        Unknown unit, a unit of another kind, or ``psi``/``bar`` without ``g``/``a``.
+    """
+    name = unit.strip()
+    try:
+        factor = convert_quantity(f"1 {name}", kind, atmospheric_pressure=0.0)
+    except QuantityError as error:
+        if name.lower() == name or "could not be parsed" not in str(error):
+            raise
+        name = name.lower()
+        factor = convert_quantity(f"1 {name}", kind, atmospheric_pressure=0.0)
+    return factor, name in _GAUGE_UNITS

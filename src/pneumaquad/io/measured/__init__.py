@@ -10,7 +10,6 @@ from .importer import list_source_columns, read_measured, read_source
 from .mapping import (
     QUANTITIES,
     STANDARD_ATMOSPHERE,
-    UNITS,
     ColumnMapping,
     ColumnSpec,
     MeasuredDataError,
@@ -21,7 +20,6 @@ from .mapping import (
 __all__ = [
     "QUANTITIES",
     "STANDARD_ATMOSPHERE",
-    "UNITS",
     "ColumnMapping",
     "ColumnSpec",
     "MeasuredDataError",

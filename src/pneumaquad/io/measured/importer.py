@@ -97,7 +97,8 @@ def read_measured(
         raise MeasuredDataError(problems, str(path))
     return {
         QUANTITIES[quantity].column: np.ascontiguousarray(
-            to_si(raw[quantity], mapping.columns[quantity].unit, atmosphere), dtype=np.float64
+            to_si(raw[quantity], mapping.columns[quantity].unit, QUANTITIES[quantity].kind,
+                  atmosphere), dtype=np.float64
         )
         for quantity in QUANTITIES
         if quantity in raw

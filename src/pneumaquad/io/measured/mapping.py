@@ -30,18 +30,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from pneumaquad.params.conversions import METRE_PER_INCH, PASCAL_PER_PSI
+from pneumaquad.params.units import QuantityError, convert_quantity, unit_scale
 
 __all__ = [
     "QUANTITIES",
     "STANDARD_ATMOSPHERE",
-    "UNITS",
     "ColumnMapping",
     "ColumnSpec",
     "MeasuredDataError",
     "Quantity",
-    "Unit",
-    "canonical_unit",
     "load_mapping",
     "mapping_from_dict",
     "to_si",
@@ -97,39 +94,6 @@ QUANTITIES: dict[str, Quantity] = {
 }
 
 
-class Unit(NamedTuple):
-    """A source unit: its kind, SI factor, and whether it is a gauge pressure."""
-
-    kind: str
-    factor: float
-    gauge: bool = False
-
-
-#: Accepted source units (matched without regard to case).
-UNITS: dict[str, Unit] = {
-    "s": Unit("time", 1.0),
-    "ms": Unit("time", 1e-3),
-    "m": Unit("length", 1.0),
-    "cm": Unit("length", 1e-2),
-    "mm": Unit("length", 1e-3),
-    "in": Unit("length", METRE_PER_INCH),
-    "Pa": Unit("pressure", 1.0),
-    "kPa": Unit("pressure", 1e3),
-    "MPa": Unit("pressure", 1e6),
-    "bara": Unit("pressure", 1e5),
-    "psia": Unit("pressure", PASCAL_PER_PSI),
-    "Pag": Unit("pressure", 1.0, gauge=True),
-    "kPag": Unit("pressure", 1e3, gauge=True),
-    "MPag": Unit("pressure", 1e6, gauge=True),
-    "barg": Unit("pressure", 1e5, gauge=True),
-    "psig": Unit("pressure", PASCAL_PER_PSI, gauge=True),
-    "V": Unit("voltage", 1.0),
-    "mV": Unit("voltage", 1e-3),
-}
-_UNITS_BY_LOWER = {name.lower(): name for name in UNITS}
-_AMBIGUOUS = {"psi": ("psig", "psia"), "bar": ("barg", "bara")}
-
-
 @dataclass(frozen=True)
 class ColumnSpec:
     """Where one quantity is found in the source file and in which unit.
@@ -139,7 +103,8 @@ class ColumnSpec:
     source : str
         CSV header or MATLAB variable name (dotted for struct fields).
     unit : str
-        Canonical unit name, a key of `UNITS`.
+        The unit as written (any unit of the quantity's kind that the parameter files
+        accept, e.g. ``"mm"``, ``"psig"``, ``"kPa"``).
     column : int or None
         1-based column of a matrix variable; None for a vector or CSV column.
     """
@@ -248,16 +213,12 @@ def mapping_from_dict(data: Mapping[str, Any], origin: str | None = None) -> Col
     return ColumnMapping(MappingProxyType(columns), atmospheric_pressure, origin)
 
 
-def to_si(values: np.ndarray, unit: str, atmospheric_pressure: float) -> np.ndarray:
-    """Convert source values in ``unit`` (a key of `UNITS`) to SI; gauge adds atmosphere."""
-    spec = UNITS[unit]
-    converted = np.asarray(values, dtype=float) * spec.factor
-    return converted + atmospheric_pressure if spec.gauge else converted
-
-
-def canonical_unit(unit: str) -> str | None:
-    """The `UNITS` key matching ``unit`` regardless of case, or None."""
-    return _UNITS_BY_LOWER.get(unit.strip().lower())
+def to_si(values: np.ndarray, unit: str, kind: str, atmospheric_pressure: float) -> np.ndarray:
+    """Convert source values in ``unit`` (of physical ``kind``) to SI; gauge adds
+    atmosphere. Units follow the parameter files' rules (:mod:`pneumaquad.params.units`)."""
+    factor, gauge = unit_scale(unit, kind)
+    converted = np.asarray(values, dtype=float) * factor
+    return converted + atmospheric_pressure if gauge else converted
 
 
 def _column_spec(quantity: str, entry: Any, problems: list[str]) -> ColumnSpec | None:
@@ -286,28 +247,20 @@ def _column_spec(quantity: str, entry: Any, problems: list[str]) -> ColumnSpec |
 
 
 def _check_unit(quantity: str, kind: str, unit: Any, problems: list[str]) -> str:
-    allowed = [name for name, spec in UNITS.items() if spec.kind == kind]
-    if not isinstance(unit, str):
-        problems.append(f"{quantity}: 'unit' must be a string, one of {allowed}; got {unit!r}")
+    if not isinstance(unit, str) or not unit.strip():
+        problems.append(f"{quantity}: 'unit' must be a unit name such as "
+                        f"{_EXAMPLE_UNITS[kind]!r}; got {unit!r}")
         return ""
-    if unit.strip().lower() in _AMBIGUOUS:
-        gauge, absolute = _AMBIGUOUS[unit.strip().lower()]
-        problems.append(
-            f"{quantity}: unit {unit!r} is ambiguous; write {gauge!r} for gauge or "
-            f"{absolute!r} for absolute readings"
-        )
+    try:
+        unit_scale(unit, kind)
+    except QuantityError as error:
+        problems.append(f"{quantity}: unit {unit!r} {error}")
         return ""
-    canonical = canonical_unit(unit)
-    if canonical is None:
-        problems.append(f"{quantity}: unknown unit {unit!r}; a {kind} unit is one of {allowed}")
-        return ""
-    if UNITS[canonical].kind != kind:
-        problems.append(
-            f"{quantity}: unit {unit!r} is a {UNITS[canonical].kind} unit but {quantity} "
-            f"needs a {kind} unit, one of {allowed}"
-        )
-        return ""
-    return canonical
+    return unit.strip()
+
+
+#: A unit of each kind, for messages.
+_EXAMPLE_UNITS = {"time": "ms", "length": "mm", "pressure": "psig", "voltage": "V"}
 
 
 def _atmospheric_pressure(value: Any, problems: list[str]) -> float:
@@ -317,17 +270,11 @@ def _atmospheric_pressure(value: Any, problems: list[str]) -> float:
         '"14.7 psia" or "101.3 kPa"'
     )
     if isinstance(value, str):
-        number, _, unit = value.strip().partition(" ")
-        canonical = canonical_unit(unit)
-        spec = UNITS.get(canonical) if canonical else None
-        try:
-            magnitude = float(number)
-        except ValueError:
-            magnitude = math.nan
-        if spec is None or spec.kind != "pressure" or spec.gauge or not math.isfinite(magnitude):
+        try:  # the parameter files' parser; a gauge unit has no atmosphere to add here
+            value = convert_quantity(value, "pressure", atmospheric_pressure=None)
+        except QuantityError:
             problems.append(f"atmospheric_pressure: {value!r} {expected}")
             return math.nan
-        value = magnitude * spec.factor
     if (
         isinstance(value, bool)
         or not isinstance(value, int | float)
