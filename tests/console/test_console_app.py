@@ -16,6 +16,7 @@ pytest.importorskip("viser")
 from pneumaquad.console.app import ConsoleApp
 from pneumaquad.console.scene import capsule_mesh, geom_node_name
 from pneumaquad.console.teleop import CLAMPED_COLOUR, REACHABLE_COLOUR, map_stylus
+from pneumaquad.params import ParameterError
 
 
 @pytest.fixture(scope="module")
@@ -120,6 +121,28 @@ def test_supply_and_gain_sliders_change_the_simulation_live(quadruped: ConsoleAp
     np.testing.assert_allclose(ratio[betas], 0.5)
     np.testing.assert_allclose(ratio[~betas], 1.0)
     controls.gains["beta"].value = 1.0
+
+
+def test_supply_change_keeps_parameters_and_records_in_sync(fixed: ConsoleApp) -> None:
+    bank = fixed.simulation.bank
+    before = fixed.supply_gauge_pressure()
+    fixed.set_supply_pressure(420e3)
+    for actuator, record in zip(bank.actuators, bank.params, strict=True):
+        assert actuator.supply.supply_pressure == record["supply_pressure"]
+        assert record["supply_pressure"] == record["atmospheric_pressure"] + 420e3
+    assert fixed.supply_gauge_pressure() == pytest.approx(420e3)
+    packed = bank.params.copy()
+    with pytest.raises(ParameterError, match=r"supply\.supply_pressure") as refused:
+        fixed.set_supply_pressure(2e8)  # above 100 MPa absolute
+    assert "2" in str(refused.value) and "100 MPa" in str(refused.value)
+    assert np.array_equal(bank.params, packed)  # nothing changed
+    assert all(a.supply.supply_pressure == p for a, p in zip(
+        bank.actuators, packed["supply_pressure"], strict=True))
+    fixed.controls.supply.value = 200000.0  # the slider: refused, shown, unchanged
+    assert "supply unchanged" in fixed.message and "supply.supply_pressure" in fixed.message
+    assert np.array_equal(bank.params, packed)
+    fixed.message = ""
+    fixed.set_supply_pressure(before)
 
 
 def test_stylus_drives_the_front_right_foot_through_ik(fixed: ConsoleApp) -> None:

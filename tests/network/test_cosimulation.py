@@ -3,7 +3,8 @@
 Measured: the lockstep co-simulation of the front-right gamma step (fixed thorax, 1 ms
 control step) is bit-identical to :class:`RobotSimulation` run in process, in process
 and over loopback UDP, also through a lossy, reordering proxy (the server recognises
-retransmitted commands by their effect time and does not step twice). The piston
+retransmitted commands by their effect time and does not step twice). The actuator side
+holds no MuJoCo data and starts from the dynamics' pistons (its first STATE). The piston
 position travels as ``x`` and is turned back into a tendon length ``x + l2``; the kernel
 computes ``(x + l2) - l2``, which could differ from ``x`` in the last bit, but did not
 on this experiment; a 1e-12 rad bound is kept for that case.
@@ -14,6 +15,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Iterator
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -23,6 +25,7 @@ from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.experiments import make_experiment
 from pneumaquad.network.faults import FaultProxy, FaultRates
 from pneumaquad.network.server import DynamicsServer
+from pneumaquad.network.state import StateMessage
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.simulation import RobotSimulation
@@ -58,7 +61,8 @@ def test_in_process_lockstep_equals_the_coupled_simulation(reference: np.ndarray
     dynamics = DynamicsSide(_robot(), "force")
     dynamics.set_pose(POSE)
     actuators = ActuatorSide(_robot())
-    actuators.set_pose(POSE)
+    # from the dynamics' own pistons, as ActuatorClient.connect does
+    actuators.set_pose(POSE, piston_positions=dynamics.state().piston_positions)
     experiment = make_experiment("gamma-step", actuators.robot.joint_names, POSE,
                                  actuators.control_step, SETTLE)
     angles = []
@@ -69,6 +73,43 @@ def test_in_process_lockstep_equals_the_coupled_simulation(reference: np.ndarray
         angles.append(dynamics.state().joint_angles)
     difference = np.abs(np.array(angles) - reference).max()
     assert difference <= TOLERANCE, f"max angle difference {difference:.3g} rad"
+
+
+def test_the_actuator_side_makes_no_mujoco_data(monkeypatch: pytest.MonkeyPatch) -> None:
+    robot = _robot()
+
+    def refuse(*_args: object) -> None:
+        raise AssertionError("the actuator side made a mujoco.MjData")
+
+    monkeypatch.setattr(mujoco, "MjData", refuse)
+    side = ActuatorSide(robot)
+    side.set_pose(POSE)
+    side.command_angles(POSE)
+    pistons = side.joints.pistons_from_angles(np.clip(POSE, robot.lower_limits(),
+                                                      robot.upper_limits()))
+    state = StateMessage(
+        simulation_time=0.0, joint_angles=POSE, joint_velocities=np.zeros(12),
+        piston_positions=pistons, piston_velocities=np.zeros(12),
+        thorax_position=np.zeros(3), thorax_quaternion=np.array([1.0, 0.0, 0.0, 0.0]))
+    forces = side.forces(state)
+    assert forces.shape == (12,) and np.all(np.isfinite(forces))
+    assert side.bank.count == 12 and side.air_consumed() == 0.0
+
+
+def test_geometric_pistons_stay_within_the_tolerance(reference: np.ndarray) -> None:
+    """Without the STATE's pistons the actuator side places them by the linkage's closed
+    form, a few 1e-17 m from MuJoCo's tendon lengths (measured 2.5e-14 rad at the end)."""
+    dynamics = DynamicsSide(_robot(), "force")
+    dynamics.set_pose(POSE)
+    actuators = ActuatorSide(_robot())
+    actuators.set_pose(POSE)
+    experiment = make_experiment("gamma-step", actuators.robot.joint_names, POSE,
+                                 actuators.control_step, SETTLE)
+    for step in range(STEPS):
+        actuators.command_angles(experiment.references(step))
+        dynamics.apply(actuators.forces(dynamics.state()))
+        dynamics.step()
+    assert np.abs(dynamics.state().joint_angles - reference[-1]).max() <= TOLERANCE
 
 
 def test_force_mode_refuses_actuator_seal_friction() -> None:

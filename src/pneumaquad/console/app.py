@@ -137,7 +137,7 @@ class ConsoleApp:
         self.simulation = simulation
         self.home_angles = initial_pose(simulation)
         self.initial_supply = simulation.supply_pressure()  # tank or regulated [Pa]
-        self.base_gain_scale = simulation.base_gain_scale.copy()
+        self.base_gain_scale = simulation.bank.base_gain_scale.copy()
         self.chunk_steps = max(1, round(self.chunk / simulation.control_step))
         self.scene = RobotScene(self.server, robot)
         self.teleop = FootTeleoperation(self.server, simulation, self.home_angles,
@@ -376,28 +376,46 @@ class ConsoleApp:
     # --- pneumatics and control ------------------------------------------------------
     def supply_gauge_pressure(self) -> float:
         """Regulated supply pressure [Pa, gauge] of the cylinders."""
-        p = self.simulation.params[0]
-        return float(p["supply_pressure"] - p["atmospheric_pressure"])
+        actuator = self.simulation.bank.actuators[0]
+        return float(actuator.supply.supply_pressure - actuator.gas.atmospheric_pressure)
 
     def set_supply_pressure(self, gauge_pressure: float) -> None:
-        """Set the regulated supply pressure [Pa, gauge] of every cylinder, live."""
+        """Set the regulated supply pressure [Pa, gauge] of every cylinder, live.
+
+        Goes through the actuator bank's setter: the cylinders' validated parameters and
+        their packed records change together.
+
+        Raises
+        ------
+        ParameterError
+            The absolute pressure is outside ``supply.supply_pressure``'s range (at most
+            100 MPa, above the exhaust pressure, at most a tank's initial pressure);
+            nothing changes.
+        """
         with self.lock:
-            params = self.simulation.params
-            params["supply_pressure"] = params["atmospheric_pressure"] + gauge_pressure
+            bank = self.simulation.bank
+            bank.set_supply_pressure(bank.params["atmospheric_pressure"] + gauge_pressure)
 
     def gain_scale_of(self, joint_type: str) -> float:
         """Operator gain scale of ``joint_type`` (1 = the parameter file's gains)."""
         simulation = self.simulation
         index = simulation.robot.joint_types.index(joint_type)
-        return float(simulation.base_gain_scale[index] / self.base_gain_scale[index])
+        return float(simulation.bank.base_gain_scale[index] / self.base_gain_scale[index])
 
     def set_gain_scale(self, joint_type: str, scale: float) -> None:
-        """Scale Kp, Ki, Kd of every ``joint_type`` controller by ``scale``, live."""
+        """Scale Kp, Ki, Kd of every ``joint_type`` controller by ``scale``, live (through
+        the actuator bank: the controller tables' ``gain_scale`` becomes the file's
+        times ``scale``).
+
+        Raises
+        ------
+        ParameterError
+            The resulting gain scale is outside [0, 100].
+        """
         with self.lock:
             simulation = self.simulation
             mask = np.array([t == joint_type for t in simulation.robot.joint_types])
-            simulation.base_gain_scale[mask] = self.base_gain_scale[mask] * scale
-            simulation.gain_scale[mask] = simulation.base_gain_scale[mask]
+            simulation.bank.set_gain_scale(self.base_gain_scale[mask] * scale, mask)
 
     def set_mapping(self, scale: float | None = None,
                     shift: Sequence[float] | None = None, enabled: bool | None = None) -> None:

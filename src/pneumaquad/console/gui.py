@@ -15,6 +15,7 @@ import numpy as np
 import viser
 import viser.uplot as uplot
 
+from pneumaquad.params import ParameterError
 from pneumaquad.robot.builder import CONFIGURATIONS
 from pneumaquad.robot.environment import ENVIRONMENTS
 
@@ -139,7 +140,7 @@ class ConsoleControls:
         self.real_time.on_update(lambda _event: setattr(app, "real_time", self.real_time.value))
         self.configuration.on_update(lambda _event: self._rebuild())
         self.environment.on_update(lambda _event: self._rebuild())
-        self.supply.on_update(lambda _event: app.set_supply_pressure(1000.0 * self.supply.value))
+        self.supply.on_update(lambda _event: self._set_supply())
         for joint_type, slider in self.gains.items():
             slider.on_update(
                 lambda _event, t=joint_type, s=slider: app.set_gain_scale(t, s.value))
@@ -172,6 +173,15 @@ class ConsoleControls:
             self.walk_heading.value = round(math.degrees(walking.heading))
         finally:
             self._syncing = False
+
+    def _set_supply(self) -> None:
+        """The supply slider [kPa g]: a value the parameters refuse leaves the supply as it
+        was and shows why."""
+        try:
+            self.app.set_supply_pressure(1000.0 * self.supply.value)
+        except ParameterError as error:
+            self.app.message = "supply unchanged: " + "; ".join(map(str, error.problems))
+            self.app.refresh()
 
     def _rebuild(self) -> None:
         if (self.configuration.value, self.environment.value) != (

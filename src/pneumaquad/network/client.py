@@ -131,7 +131,7 @@ class ActuatorClient:
 
     def connect(self) -> StateMessage:
         """``HELLO``, the server's ``HELLO`` and its first ``STATE``; resets the actuators to
-        the state's posture.
+        the state's posture and pistons.
 
         Raises
         ------
@@ -146,7 +146,7 @@ class ActuatorClient:
             lambda sequence: encode_hello(sequence, time.monotonic(), self.side.joint_count,
                                           self.side.control_step),
             lambda state, sent: self.server_joint_count is not None)
-        self.side.set_pose(state.joint_angles)
+        self.side.set_pose(state.joint_angles, piston_positions=state.piston_positions)
         return state
 
     def run(self, experiment: Experiment | None, steps: int,

@@ -9,9 +9,9 @@ import os
 import re
 import tomllib
 import typing
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import tomli_w
 from pydantic import BaseModel, ValidationError
@@ -29,6 +29,7 @@ __all__ = [
     "load_rig",
     "load_robot",
     "resolved_parameters_toml",
+    "validated_update",
 ]
 
 DATA_DIR = Path(__file__).parent / "data"
@@ -232,6 +233,61 @@ def _validate(root: type[BaseModel], data: dict[str, Any], raw: dict[str, Any], 
         return root.model_validate(data, context=context)
     except ValidationError as exc:
         raise ParameterError(_problems(exc, raw, root), source=source) from None
+
+
+_Model = TypeVar("_Model", bound=BaseModel)
+
+
+def validated_update(model: _Model, changes: Mapping[str, Any],
+                     source: str = "update") -> _Model:
+    """A copy of a validated parameter model with some keys changed, validated again.
+
+    Unlike pydantic's ``model_copy(update=...)``, every range and cross-field check of
+    the model runs on the result, so a setter cannot store a value a parameter file could
+    not hold.
+
+    Parameters
+    ----------
+    model : pydantic model
+        A validated parameter model (``ActuatorParameters``, ``ControllerParameters``...).
+    changes : mapping
+        Dotted key (``"supply.supply_pressure"``) → new value, SI (plain floats are SI
+        values; quantity strings such as ``"50 psig"`` are accepted too).
+    source : str
+        Where the change comes from, for the error message.
+
+    Returns
+    -------
+    The same model type, new (the input is frozen and unchanged).
+
+    Raises
+    ------
+    ParameterError
+        Naming each key, its value and what was expected (``supply.supply_pressure:
+        2e+08 should be greater than 0 Pa and at most 100 MPa``).
+    """
+    data = model.model_dump()
+    for key, value in changes.items():
+        node = data
+        *parents, name = key.split(".")
+        for part in parents:
+            child = node.get(part)
+            if not isinstance(child, dict):
+                raise ParameterError([Problem(key, value, "is not a known key")], source)
+            node = child
+        node[name] = value
+    root = type(model)
+    try:
+        return root.model_validate(data, context={"atmospheric_pressure": _atmosphere(model)})
+    except ValidationError as exc:
+        raise ParameterError(_problems(exc, data, root), source=source) from None
+
+
+def _atmosphere(model: BaseModel) -> float | None:
+    """The atmospheric pressure [Pa] gauge values of an update refer to, if the model has
+    one (its gas table)."""
+    gas = getattr(model, "gas", None)
+    return getattr(gas, "atmospheric_pressure", None)
 
 
 def _load_raw(

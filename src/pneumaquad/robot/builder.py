@@ -33,7 +33,7 @@ from .environment import WORLD_CONAFFINITY, WORLD_CONTYPE, add_environment
 from .frames import frame_matrix, invert, rotation_to_quaternion
 from .linkage import Linkage, design_linkage
 
-__all__ = ["CONFIGURATIONS", "RobotModel", "build_robot", "leg_linkages"]
+__all__ = ["CONFIGURATIONS", "RobotModel", "build_robot", "leg_linkages", "tibia_body_legs"]
 
 CONFIGURATIONS = ("quadruped", "fixed", "testbed")
 
@@ -102,6 +102,19 @@ class RobotModel:
     def to_xml(self) -> str:
         """The model as MJCF text, to open in MuJoCo's own viewer."""
         return self.xml
+
+
+def tibia_body_legs(robot: RobotModel) -> dict[int, int]:
+    """Body id of each leg's tibia (the foot link) → index of the leg in ``robot.legs``.
+
+    A contact is a foot contact when one of its geoms belongs to the body
+    ``<leg>_tibia`` (:meth:`RobotSimulation.foot_normal_forces
+    <pneumaquad.robot.simulation.RobotSimulation.foot_normal_forces>`,
+    :func:`pneumaquad.robot.feedback.foot_contact_forces`).
+    """
+    model = robot.model
+    return {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
+            for index, leg in enumerate(robot.legs)}
 
 
 def leg_linkages(

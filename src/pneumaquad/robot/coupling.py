@@ -29,6 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from pneumaquad.core.bank import ActuatorArrays
 from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.kernel import step_actuators
@@ -92,17 +93,13 @@ class Cylinders(NamedTuple):
     seal: np.ndarray
 
 
-class ActuatorArrays(NamedTuple):
-    """The pneumatic kernel's record arrays (pneumaquad.core.layout)."""
-
-    params: np.ndarray  # (N,) ACTUATOR_PARAMETERS_DTYPE
-    state: np.ndarray  # (N,) ACTUATOR_STATE_DTYPE
-    supply: np.ndarray  # (1,) SUPPLY_DTYPE, shared
-    outputs: np.ndarray  # (N,) ACTUATOR_OUTPUT_DTYPE
-
-
 class Controllers(NamedTuple):
-    """Per joint: PID gains and memory, settings (JOINT_CONTROL_DTYPE) and references."""
+    """Per joint: PID gains and memory, settings (JOINT_CONTROL_DTYPE) and references.
+
+    The joint-side bundle: the gains, gain scale, PID memory and open-loop voltages are
+    the actuator bank's arrays (:class:`pneumaquad.core.bank.ActuatorBank`), the
+    settings, force references and joint-angle references the joints' own
+    (:class:`pneumaquad.robot.joints.CylinderJoints`)."""
 
     gains: np.ndarray  # PID_GAINS_DTYPE, pneumaquad.core.control.pid
     gain_scale: np.ndarray  # factor on Kp, Ki, Kd [-]

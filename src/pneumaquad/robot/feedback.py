@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from .builder import RobotModel
+from .builder import RobotModel, tibia_body_legs
 from .simulation import RobotSimulation
 
 __all__ = [
@@ -55,17 +55,6 @@ DEFAULT_MAX_DEVICE_FORCE = 3.3
 SINGULAR_THRESHOLD = 0.03
 #: Damping λ [m] reached at an exactly singular J.
 MAX_DAMPING = 0.01
-
-
-def tibia_body_legs(robot: RobotModel) -> dict[int, int]:
-    """Body id of each leg's tibia (the foot link) → index of the leg in ``robot.legs``.
-
-    The same rule as :meth:`RobotSimulation.foot_normal_forces`: a contact is a foot
-    contact when one of its geoms belongs to the body ``<leg>_tibia``.
-    """
-    model = robot.model
-    return {mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
-            for index, leg in enumerate(robot.legs)}
 
 
 def leg_dof_addresses(robot: RobotModel, leg: str) -> np.ndarray:

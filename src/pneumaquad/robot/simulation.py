@@ -1,13 +1,15 @@
 """The coupled simulation: a MuJoCo robot whose joints are driven by pneumatic cylinders.
 
-:class:`RobotSimulation` holds the MuJoCo model and data, the packed actuator arrays of
-all cylinders and their controllers. Each control step (default 1 ms) computes MuJoCo's
-kinematics of the present state (``mj_step1``), reads every piston position and velocity
-from the cylinder tendons, brings the chambers to the present instant, runs all
-controllers, applies the cylinder forces and completes MuJoCo's step (``mj_step2``), in
-one compiled call (:mod:`pneumaquad.robot.coupling`). Chunks of steps run inside compiled code
-(:mod:`pneumaquad.robot.stepping`); Python sees the state between chunks, for
-recording, gain scheduling and progress.
+:class:`RobotSimulation` holds the MuJoCo model and data and the robot's cylinders:
+one :class:`~pneumaquad.core.bank.ActuatorBank` (parameters, chamber state, supply,
+PID controllers) with the joint side of :class:`~pneumaquad.robot.joints.CylinderJoints`
+(linkages, seal friction, joint-control settings and references). Each control step
+(default 1 ms) computes MuJoCo's kinematics of the present state (``mj_step1``), reads
+every piston position and velocity from the cylinder tendons, brings the chambers to the
+present instant, runs all controllers, applies the cylinder forces and completes MuJoCo's
+step (``mj_step2``), in one compiled call (:mod:`pneumaquad.robot.coupling`). Chunks of
+steps run inside compiled code (:mod:`pneumaquad.robot.stepping`); Python sees the state
+between chunks, for recording, gain scheduling and progress.
 """
 
 from __future__ import annotations
@@ -15,39 +17,18 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Callable
+from typing import Any
 
 import mujoco
 import numpy as np
 
-from pneumaquad.core.actuator import (
-    initial_state,
-    new_outputs,
-    pack_parameter_array,
-    supply_state,
-)
-from pneumaquad.core.control.pid import PID_GAINS_DTYPE, controller_gains, new_pid_state
-from pneumaquad.core.layout import ACTUATOR_STATE_DTYPE, SUPPLY_TANK
+from pneumaquad.core.bank import ActuatorBank
 from pneumaquad.gait.stability import STANCE_FORCE
-from pneumaquad.params import ActuatorParameters
 
-from .builder import RobotModel
-from .coupling import (
-    COUPLING_DTYPE,
-    JOINT_CONTROL_DTYPE,
-    LINKAGE_DTYPE,
-    MODE_CLOSED_LOOP,
-    MODE_OPEN_LOOP,
-    MODE_UNCOMMANDED,
-    SEAL_DTYPE,
-    ActuatorArrays,
-    Controllers,
-    Cylinders,
-    MujocoBuffers,
-    StepSettings,
-    StepTrace,
-    set_seal_friction,
-)
+from .builder import RobotModel, tibia_body_legs
+from .coupling import MujocoBuffers, set_seal_friction
 from .errors import SimulationDivergedError
+from .joints import CylinderJoints, seal_friction_row
 from .stepping import (
     MJ_FORCE_STAGE_ADDRESSES,
     MJ_STEP1_ADDRESS,
@@ -57,6 +38,7 @@ from .stepping import (
     STATUS_MUJOCO,
     MujocoStepper,
     advance_chunk,
+    struct_address,
     unstable_quantities,
 )
 
@@ -82,31 +64,6 @@ def _step_addresses(model: mujoco.MjModel) -> np.ndarray:
                     dtype=np.uint64)
 
 
-def seal_friction_row(actuator: ActuatorParameters) -> np.ndarray:
-    """Seal friction for MuJoCo's dry-friction constraint, a :data:`SEAL_DTYPE` record:
-    Fs, Fc [N], vS [m/s], i, viscous coefficient [N s/m].
-
-    The Stribeck-tanh and LuGre models give their Stribeck curve (eq 4.2.6) as the
-    breakaway force and Cv as viscous damping; Coulomb(-viscous) give Fc (Fs from rest);
-    the viscous model gives damping only (thesis 4.2.2).
-    """
-    f = actuator.friction
-    row = np.zeros((), SEAL_DTYPE)
-    row["stribeck_velocity"] = f.stribeck_velocity
-    row["stribeck_exponent"] = f.stribeck_exponent
-    if f.model in ("stribeck_tanh", "lugre", "coulomb_viscous"):
-        row["static_force"] = f.static_force
-        row["coulomb_force"] = f.coulomb_force
-        row["viscous_coefficient"] = f.viscous_coefficient
-        if f.model == "coulomb_viscous":
-            row["stribeck_velocity"] = 1e-4
-    elif f.model == "coulomb":
-        row["static_force"] = row["coulomb_force"] = f.coulomb_force
-    else:
-        row["viscous_coefficient"] = f.damping_coefficient
-    return row
-
-
 def stance_swing_schedule(
     stance_scale: float, swing_scale: float, contact_force: float = STANCE_FORCE
 ) -> GainSchedule:
@@ -121,6 +78,24 @@ def stance_swing_schedule(
     return schedule
 
 
+class _Held:
+    """A read-only attribute of :class:`RobotSimulation` that is an array or bundle held
+    by its joints or their bank (the same object: write into it, never rebind it)."""
+
+    def __init__(self, owner: str, name: str | None = None) -> None:
+        self.owner, self.name = owner, name
+
+    def __set_name__(self, cls: type, name: str) -> None:
+        self.name = self.name or name
+
+    def __get__(self, simulation: Any, cls: type | None = None) -> Any:
+        if simulation is None:
+            return self
+        return getattr(getattr(simulation, self.owner), self.name)
+
+    def __set__(self, simulation: Any, value: Any) -> None:
+        raise AttributeError(f"{self.name} is held by the simulation's {self.owner}: write "
+                             f"into it ({self.name}[...] = ...) or use a setter")
 
 
 def _bad_actuator_quantity(simulation: RobotSimulation, cylinder: int) -> str:
@@ -146,82 +121,57 @@ class RobotSimulation:
         Override of the actuator files' supply model (all cylinders share one supply).
     """
 
+    # The cylinders' arrays and the bundles the compiled step reads, held by the joints
+    # (CylinderJoints) and their actuator bank (ActuatorBank): the same objects.
+    params = _Held("bank")
+    state = _Held("bank")
+    supply = _Held("bank")
+    outputs = _Held("bank")
+    gains = _Held("bank")
+    pid_state = _Held("bank")
+    base_gain_scale = _Held("bank")
+    gain_scale = _Held("bank")
+    open_loop_voltage = _Held("bank")
+    commands = _Held("bank")
+    reference_positions = _Held("bank", "references")
+    linkage = _Held("joints")
+    seal = _Held("joints")
+    joint_control = _Held("joints", "settings")
+    force_reference = _Held("joints")
+    reference_angles = _Held("joints")
+    positions = _Held("joints")
+    velocities = _Held("joints")
+    coupling = _Held("joints")
+    cylinders = _Held("joints")
+    actuators = _Held("joints")
+    controllers = _Held("joints")
+    trace = _Held("joints")
+    step_settings = _Held("joints")
+
     def __init__(self, robot: RobotModel, supply: str | None = None) -> None:
         self.robot = robot
         # The compiled step writes the seal friction into the model every step: each
         # simulation gets its own copy, so simulations built from one RobotModel (or the
         # model a renderer reads) never see each other's values.
         self.model = copy.copy(robot.model)
-        self.data = mujoco.MjData(self.model)
+        self.data = d = mujoco.MjData(self.model)
         p = robot.parameters
-        n = robot.joint_count
-        self.step_settings = StepSettings(
-            control_step=float(p.simulation.control_step),
-            substeps=int(p.simulation.substeps),
-            mujoco_friction=p.simulation.seal_friction == "mujoco")
-        actuators = [robot.actuators[t] for t in robot.joint_types]
-        self.params = pack_parameter_array(actuators)
-        first = robot.actuators["alpha"]
-        if supply is not None and supply != first.supply.model:
-            first = first.model_copy(update={"supply": first.supply.model_copy(
-                update={"model": supply})})
-        self.supply = supply_state(first)
-        self._initial_supply = self.supply.copy()
-        self.outputs = new_outputs(n)
-        self.linkage = np.zeros(n, LINKAGE_DTYPE)
-        for i, joint_type in enumerate(robot.joint_types):
-            link = robot.linkages[joint_type]
-            for field in LINKAGE_DTYPE.names:
-                self.linkage[i][field] = getattr(link, field)
-        self.seal = np.array([seal_friction_row(a) for a in actuators], dtype=SEAL_DTYPE)
-        controllers = [getattr(p.controller, t) for t in robot.joint_types]
-        self.gains = np.array(
-            [controller_gains(c, a.valve) for c, a in zip(controllers, actuators, strict=True)],
-            dtype=PID_GAINS_DTYPE,
-        )
-        self.base_gain_scale = np.array([c.gain_scale for c in controllers])
-        self.gain_scale = self.base_gain_scale.copy()
-        self.joint_control = np.zeros(n, JOINT_CONTROL_DTYPE)
-        self.joint_control["force_feedback_gain"] = [c.force_feedback_gain for c in controllers]
-        self.joint_control["force_feedback_time_constant"] = [
-            c.force_feedback_time_constant for c in controllers]
-        self.joint_control["mode"] = MODE_UNCOMMANDED
-        self.pid_state = new_pid_state(n)
-        self.force_reference = np.zeros(n)
-        self.reference_angles = np.zeros(n)
-        self.open_loop_voltage = self.params["offset_voltage"].copy()
-        self.commands = self.params["offset_voltage"].copy()
-        self.positions = np.zeros(n)
-        self.velocities = np.zeros(n)
-        self.reference_positions = np.zeros(n)
-        self.state = np.zeros(n, ACTUATOR_STATE_DTYPE)
-        self.coupling = np.zeros(1, COUPLING_DTYPE)
-        d = self.data
-        # Named views of the arrays above for the compiled step (the same memory).
-        self.mujoco = MujocoBuffers(
+        self.joints = CylinderJoints(robot, supply)
+        self.bank: ActuatorBank = self.joints.bank
+        self.mujoco = MujocoBuffers(  # views of MuJoCo's arrays for the compiled step
             tendon_length=d.ten_length, tendon_velocity=d.ten_velocity, control=d.ctrl,
             tendon_frictionloss=self.model.tendon_frictionloss,
             tendon_damping=self.model.tendon_damping, tendon_ids=robot.tendon_id,
             actuator_ids=robot.actuator_id)
-        self.cylinders = Cylinders(linkage=self.linkage, seal=self.seal)
-        self.actuators = ActuatorArrays(params=self.params, state=self.state,
-                                        supply=self.supply, outputs=self.outputs)
-        self.controllers = Controllers(
-            gains=self.gains, gain_scale=self.gain_scale, settings=self.joint_control,
-            pid_state=self.pid_state, force_reference=self.force_reference,
-            reference_angles=self.reference_angles, open_loop_voltage=self.open_loop_voltage)
-        self.trace = StepTrace(commands=self.commands, positions=self.positions,
-                               velocities=self.velocities,
-                               reference_positions=self.reference_positions)
         self.stepper = MujocoStepper(
-            step_addresses=_step_addresses(self.model), model_address=self.model._address,
-            data_address=d._address, warning_counts=d.warning.number,
-            physics_steps=int(p.simulation.physics_steps))
+            step_addresses=_step_addresses(self.model),
+            model_address=struct_address(self.model), data_address=struct_address(d),
+            warning_counts=d.warning.number, physics_steps=int(p.simulation.physics_steps))
+        joints = self.joints
+        self._bundles = (self.mujoco, joints.cylinders, joints.actuators, joints.controllers,
+                         joints.trace, joints.coupling, joints.step_settings)
         self.gain_schedule: GainSchedule | None = None
-        self._tibia_leg = {
-            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, f"{leg}_tibia"): index
-            for index, leg in enumerate(robot.legs)
-        }
+        self._tibia_legs = tibia_body_legs(robot)
         controller = p.controller
         if controller.stance_gain_scale != 1.0 or controller.swing_gain_scale != 1.0:
             self.gain_schedule = stance_swing_schedule(
@@ -229,7 +179,8 @@ class RobotSimulation:
             )
         self.steps_taken = 0
         self.divergences = 0  # runs of step() that stopped on a diverged state
-        self.set_pose(np.clip(np.zeros(n), robot.lower_limits(), robot.upper_limits()))
+        self.set_pose(np.clip(np.zeros(robot.joint_count), robot.lower_limits(),
+                              robot.upper_limits()))
 
     # --- settings (held once, in the bundles the compiled step reads) -----------------
     @property
@@ -278,7 +229,7 @@ class RobotSimulation:
         for index in range(data.ncon):
             contact = data.contact[index]
             for body in (model.geom_bodyid[contact.geom1], model.geom_bodyid[contact.geom2]):
-                leg = self._tibia_leg.get(int(body))
+                leg = self._tibia_legs.get(int(body))
                 if leg is not None:
                     mujoco.mj_contactForce(model, data, index, wrench)
                     forces[leg] += abs(wrench[0])
@@ -286,18 +237,15 @@ class RobotSimulation:
 
     def air_consumed(self) -> float:
         """Air drawn from the supply since the start [kg]."""
-        return float(self.supply[0]["drawn_mass"])
+        return self.bank.air_consumed()
 
     def air_consumed_per_joint(self) -> np.ndarray:
         """Air drawn by each cylinder since the start [kg]."""
-        return self.state["air_consumed"].copy()
+        return self.bank.air_consumed_per_actuator()
 
     def supply_pressure(self) -> float:
         """Tank pressure (tank supply) or regulated supply pressure [Pa]."""
-        supply = self.supply[0]
-        if supply["model"] == SUPPLY_TANK:
-            return float(supply["tank_pressure"])
-        return float(self.params[0]["supply_pressure"])
+        return self.bank.supply_pressure()
 
     def set_pose(
         self,
@@ -322,7 +270,6 @@ class RobotSimulation:
         angles = np.clip(joint_angles, robot.lower_limits(), robot.upper_limits())
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[robot.qpos_address] = angles
-        self.supply[:] = self._initial_supply
         self.steps_taken = 0
         if robot.free:
             if thorax_position is not None:
@@ -330,44 +277,27 @@ class RobotSimulation:
             if thorax_quaternion is not None:
                 self.data.qpos[3:7] = thorax_quaternion
         mujoco.mj_forward(self.model, self.data)
-        lengths = self.data.ten_length[robot.tendon_id]
-        for i in range(robot.joint_count):
-            p = self.params[i]
-            retracted = self.linkage[i]['retracted_length']
-            position = min(max(lengths[i] - retracted, 0.0), p["stroke"])
-            pressure = chamber_pressure
-            if pressure is None:
-                pressure = 0.5 * (p["supply_pressure"] + p["exhaust_pressure"])
-            initial_state(p, position, pressure, pressure, out=self.state[i])
-        self.pid_state[:] = 0.0
-        self.outputs[:] = 0.0
-        self.coupling["pending"] = 0  # the chambers start at the present instant
+        joints = self.joints
+        pistons = joints.pistons_from_lengths(self.data.ten_length[robot.tendon_id])
+        joints.reset(angles, pistons, chamber_pressure)
         self.coupling["fresh"] = 1  # mj_forward above
         if self.mujoco_friction:  # the breakaway level at rest for the first step
             for index in range(robot.joint_count):
                 set_seal_friction(self.mujoco, self.seal, index)
-        self.force_reference[:] = 0.0
-        self.joint_control["force_tracking_gain"] = 0.0
-        self.reference_angles[:] = angles
         self.step(0)  # piston readouts and forces of the new pose (compiles on first use)
 
-    # --- commands --------------------------------------------------------------------
+    # --- commands (the joints' own, :class:`~pneumaquad.robot.joints.CylinderJoints`) --
     def command_angles(self, angles: np.ndarray, joints: np.ndarray | None = None) -> None:
         """Closed-loop position control of ``joints`` (all by default) to ``angles`` [rad]."""
-        index = slice(None) if joints is None else joints
-        self.reference_angles[index] = angles
-        self.joint_control["mode"][index] = MODE_CLOSED_LOOP
+        self.joints.command_angles(angles, joints)
 
     def command_voltages(self, voltages: np.ndarray, joints: np.ndarray | None = None) -> None:
         """Open-loop valve voltages [V] for ``joints`` (all by default)."""
-        index = slice(None) if joints is None else joints
-        self.open_loop_voltage[index] = voltages
-        self.joint_control["mode"][index] = MODE_OPEN_LOOP
+        self.joints.command_voltages(voltages, joints)
 
     def release(self, joints: np.ndarray | None = None) -> None:
         """Hold the valves of ``joints`` at their offset (closed centre), uncommanded."""
-        index = slice(None) if joints is None else joints
-        self.joint_control["mode"][index] = MODE_UNCOMMANDED
+        self.joints.release(joints)
 
     def track_forces(self, forces: np.ndarray, gain: float | np.ndarray,
                      joints: np.ndarray | None = None, stiffness: float = 1.0) -> None:
@@ -379,28 +309,14 @@ class RobotSimulation:
         ``voltage = PD + gain · (F_set − F)``. Set-points hold until changed;
         :meth:`stop_force_tracking` returns to plain position control.
         """
-        index = slice(None) if joints is None else joints
-        gains = np.broadcast_to(np.asarray(gain, dtype=float),
-                                self.joint_control["force_tracking_gain"][index].shape)
-        if np.any(gains < 0.0) or not np.all(np.isfinite(gains)):
-            raise ValueError(f"force tracking gain must be finite and >= 0, got {gain!r}")
-        if not (math.isfinite(stiffness) and stiffness > 0.0):
-            raise ValueError(f"stance stiffness factor must be finite and > 0, got "
-                             f"{stiffness!r}")
-        self.force_reference[index] = forces
-        self.joint_control["force_tracking_gain"][index] = gains
-        self.joint_control["force_stiffness"][index] = stiffness
+        self.joints.track_forces(forces, gain, joints, stiffness)
 
     def stop_force_tracking(self, joints: np.ndarray | None = None) -> None:
         """Plain position control (integral back on) for ``joints`` (all by default).
 
         The force reference of a joint that was tracking restarts from its present force
         (the low-pass mean that pressure feedback, if configured, works about)."""
-        selected = np.zeros(self.robot.joint_count, dtype=bool)
-        selected[slice(None) if joints is None else joints] = True
-        tracking = selected & (self.joint_control["force_tracking_gain"] > 0.0)
-        self.joint_control["force_tracking_gain"][tracking] = 0.0
-        self.force_reference[tracking] = self.outputs["pneumatic_force"][tracking]
+        self.joints.stop_force_tracking(joints)
 
     def force_tracking_gains(self) -> np.ndarray:
         """Per joint: force tracking gain [V/N] (0: plain position control)."""
@@ -430,10 +346,8 @@ class RobotSimulation:
         table = _NO_TABLE if reference_table is None else reference_table
         d = self.data
         start = self.time
-        done, status, cylinder = advance_chunk(
-            self.stepper, count, table, reference_start, self.mujoco, self.cylinders,
-            self.actuators, self.controllers, self.trace, self.coupling, self.step_settings,
-        )
+        done, status, cylinder = advance_chunk(self.stepper, count, table, reference_start,
+                                               *self._bundles)
         self.steps_taken += done
         if status == STATUS_MUJOCO:
             self.divergences += 1
@@ -492,12 +406,12 @@ class RobotSimulation:
     # --- readouts --------------------------------------------------------------------
     def chamber_pressures(self) -> np.ndarray:
         """(joints, 2) cap and rod pressures [Pa], absolute."""
-        return np.column_stack([self.state["cap_pressure"], self.state["rod_pressure"]])
+        return self.bank.chamber_pressures()
 
     def cylinder_forces(self) -> np.ndarray:
         """Net pneumatic force of each cylinder [N] (eq 4.1.11 without friction)."""
-        return self.outputs["pneumatic_force"].copy()
+        return self.bank.forces()
 
     def atmospheric_pressure(self) -> float:
         """Atmospheric pressure [Pa] of the actuator files."""
-        return float(self.params[0]["atmospheric_pressure"])
+        return self.bank.atmospheric_pressure()
