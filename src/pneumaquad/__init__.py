@@ -5,7 +5,8 @@ The few names most work starts from are available here; each is loaded on first 
 
 - parameters: :func:`load_rig`, :func:`load_robot`, :func:`load_actuator`,
   :func:`list_parameter_sets` (TOML with units, validated, SI inside);
-- the 1-DoF rig: :func:`simulate_rig` and the reference signals in :mod:`signals`;
+- the 1-DoF rig: :func:`simulate_rig`, :func:`simulate_rigs` (N rigs in one compiled
+  loop, e.g. a parameter sweep) and the reference signals in :mod:`signals`;
 - the robot: :func:`build_robot` (MuJoCo model on the 12 cylinders) and
   :class:`RobotSimulation` (the coupled actuator + MuJoCo step);
 - results: :func:`read_run_folder` (recording, parameters and summary of a run folder)
@@ -30,6 +31,7 @@ _PUBLIC = {
     "load_actuator": "pneumaquad.params.loader",
     "list_parameter_sets": "pneumaquad.params.loader",
     "simulate_rig": "pneumaquad.rig.simulate",
+    "simulate_rigs": "pneumaquad.rig.simulate",
     "signals": "pneumaquad.rig.signals",
     "build_robot": "pneumaquad.robot.builder",
     "RobotSimulation": "pneumaquad.robot.simulation",

@@ -29,13 +29,11 @@ from scipy.optimize import least_squares
 from pneumaquad.analysis import find_steps
 from pneumaquad.analysis.filters import sample_rate_of
 from pneumaquad.analysis.fits import FitResult, covariance_from_jacobian, r_squared
-from pneumaquad.core.actuator import supply_state
-from pneumaquad.core.control.pid import new_pid_state
 from pneumaquad.core.physics.chamber import chamber_volume_cap, chamber_volume_rod
 from pneumaquad.core.physics.valve import centered_voltage
 from pneumaquad.core.valve_fit import evaluate_equivalent_area
 from pneumaquad.params.schema import RigSetup
-from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
+from pneumaquad.rig.model import rig_bank
 from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk
 
 from .preprocess import REQUIRED_COLUMNS, IdentificationError, select_step
@@ -222,9 +220,8 @@ def _simulate_from(
     step after command k began (`pneumaquad.rig.simulate`). The start state is built here
     because `pneumaquad.rig.simulate.simulate_rig` starts at the supply temperature.
     """
-    params = pack_rig_parameters(setup)
-    state = rig_initial_state(setup, params)
-    p, s = params[0], state[0]
+    bank = rig_bank(setup)
+    p, s = bank.params[0], bank.state[0]
     if p["spacer"] == 0:
         s["position"] = start.position
     position = s["position"]
@@ -235,21 +232,19 @@ def _simulate_from(
     gas = p["gas_constant"]
     s["cap_mass"] = start.cap_pressure * cap_volume / (gas * start.cap_temperature)
     s["rod_mass"] = start.rod_pressure * rod_volume / (gas * start.rod_temperature)
-    records, rows = new_rows(command.size)
+    records, rows = new_rows(command.size, 1)
     run_rig_chunk(
-        params,
-        state,
-        supply_state(setup.actuator),
-        rig_controller_gains(setup),
-        new_pid_state(),
+        bank.actuator_arrays,
+        bank.controller_arrays,
         False,
-        np.ascontiguousarray(command, dtype=float),
+        np.ascontiguousarray(command, dtype=float).reshape(1, -1),
         0,
         command.size,
         grid.step,
         grid.substeps,
         records,
     )
+    rows = rows[0]
     return rows
 
 

@@ -30,11 +30,9 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from pneumaquad.core.actuator import supply_state
-from pneumaquad.core.control.pid import new_pid_state
 from pneumaquad.params import RigSetup, load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH
-from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
+from pneumaquad.rig.model import rig_bank
 from pneumaquad.rig.signals import sine
 from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk
 
@@ -149,29 +147,14 @@ def time_rig_run(
     setup: RigSetup, signal: np.ndarray, closed_loop: bool
 ) -> tuple[float, np.ndarray]:
     """One call of the compiled rig loop over ``signal``: (seconds, recorded rows)."""
-    params = pack_rig_parameters(setup)
-    state = rig_initial_state(setup, params)
-    supply = supply_state(setup.actuator)
-    gains = rig_controller_gains(setup)
-    controller = new_pid_state()
-    records, rows = new_rows(signal.shape[0])
+    bank = rig_bank(setup)
+    records, rows = new_rows(signal.shape[0], 1)
+    signals = np.ascontiguousarray(signal, dtype=float).reshape(1, -1)
     sim = setup.simulation
     start = time.perf_counter()
-    run_rig_chunk(
-        params,
-        state,
-        supply,
-        gains,
-        controller,
-        closed_loop,
-        signal,
-        0,
-        signal.shape[0],
-        sim.control_step,
-        sim.substeps,
-        records,
-    )
-    return time.perf_counter() - start, rows
+    run_rig_chunk(bank.actuator_arrays, bank.controller_arrays, closed_loop, signals, 0,
+                  signal.shape[0], sim.control_step, sim.substeps, records)
+    return time.perf_counter() - start, rows[0]
 
 
 def _machine() -> str:

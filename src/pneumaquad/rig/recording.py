@@ -17,7 +17,7 @@ import numpy as np
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.layout import SUPPLY_TANK
 from pneumaquad.core.pneumatics import supply_pressure_now
-from pneumaquad.io.recording import RunRecorder
+from pneumaquad.io.run_folder import RunRecorder
 from pneumaquad.params.schema import RigSetup
 
 #: The rig recording, defined once: (field of a row record, column header) in column
@@ -92,11 +92,14 @@ def write_row(records, index, sample_time, command, reference, p, s, out, supply
     row.air_consumed_normal_litres = s.air_consumed / normal_density * 1000.0
 
 
-def new_rows(count: int) -> tuple[np.ndarray, np.ndarray]:
+def new_rows(count: int, rigs: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``count`` zeroed recording rows: the records (:data:`RIG_ROW_DTYPE`) the compiled
-    code fills, and the same memory as a ``(count, N_COLUMNS)`` float array."""
-    records = np.zeros(count, RIG_ROW_DTYPE)
-    return records, records.view(np.float64).reshape(count, N_COLUMNS)
+    code fills, and the same memory as a ``(count, N_COLUMNS)`` float array; with
+    ``rigs``, ``count`` rows of each rig: ``(rigs, count)`` records and a
+    ``(rigs, count, N_COLUMNS)`` float array."""
+    shape = (count,) if rigs is None else (rigs, count)
+    records = np.zeros(shape, RIG_ROW_DTYPE)
+    return records, records.view(np.float64).reshape(*shape, N_COLUMNS)
 
 
 
@@ -125,20 +128,26 @@ class RigDivergedError(RuntimeError):
         Sample time of the row holding it [s].
     result : RigResult
         The run up to the last finite row.
+    rig : int or None
+        Index of the rig among several run together (:func:`pneumaquad.rig.simulate.
+        simulate_rigs`); None for a single rig.
     """
 
-    def __init__(self, quantity: str, time: float, result: RigResult) -> None:
+    def __init__(self, quantity: str, time: float, result: RigResult,
+                 rig: int | None = None) -> None:
         self.quantity = quantity
         self.time = time
         self.result = result
+        self.rig = rig
         rows = result.recording["time [s]"]
         kept = (
             f"the recording up to t = {rows[-1]:.6g} s is kept"
             if rows.size
             else "nothing before it was recorded"
         )
+        which = "the rig simulation" if rig is None else f"rig {rig} of the simulation"
         super().__init__(
-            f"the rig simulation stopped: {quantity} became non-finite at t = {time:.6g} s "
+            f"{which} stopped: {quantity} became non-finite at t = {time:.6g} s "
             f"({kept}); the parameters or the command drive the model where it cannot be "
             "integrated; try a smaller simulation.control_step, more simulation.substeps "
             "or other parameter values"
@@ -181,11 +190,13 @@ def record_rows(recorder: RunRecorder | None, block: np.ndarray) -> None:
 
 
 def stop_diverged(recorder: RunRecorder | None, rows: np.ndarray, flushed: int, good: int,
-                  quantity: str, when: float, started: float, integrator: str) -> None:
+                  quantity: str, when: float, started: float, integrator: str,
+                  rig: int | None = None) -> None:
     """Record rows ``flushed:good`` (the last good one is ``good - 1``) and raise
-    :class:`RigDivergedError` naming ``quantity`` and ``when`` [s]."""
+    :class:`RigDivergedError` naming ``quantity``, ``when`` [s] and, among several, the
+    ``rig``."""
     record_rows(recorder, rows[flushed:good])
     result = RigResult(as_columns(rows[:good]), False, time.perf_counter() - started,
                        integrator)
-    raise RigDivergedError(quantity, when, result)
+    raise RigDivergedError(quantity, when, result, rig)
 

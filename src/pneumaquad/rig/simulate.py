@@ -1,8 +1,15 @@
-"""Running the rig: the fixed-step compiled loop and the adaptive stiff reference.
+"""Running the rig: the fixed-step compiled loop over N rigs, and the adaptive reference.
 
 Both integrators sample the same way: at every control step k the controller (or the
 open-loop signal) sets the valve command u_k from the state at t_k; the command is held
 until t_{k+1}; row k of the recording is the state at t_{k+1} with the command u_k.
+
+The fixed-step loop (:func:`run_rig_chunk`) advances N independent rigs held in one
+actuator bank (:func:`pneumaquad.rig.model.rig_bank`: one parameter, state, supply and
+controller record per rig), one recording row per rig per step; :func:`simulate_rigs` runs
+N at once (a sweep of supply pressures, loads or gains) and :func:`simulate_rig` one. Each
+rig's recording is the one it has run alone. The adaptive reference is
+:mod:`pneumaquad.rig.reference`.
 
 Every row is checked as it is computed: the first non-finite value (NaN or inf) stops
 the run with :class:`RigDivergedError`, naming the quantity and the time, after the rows
@@ -11,34 +18,18 @@ before it have gone to the recorder.
 
 import math
 import time
-from typing import NamedTuple
+from collections.abc import Sequence
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-from pneumaquad.core.actuator import supply_state
-from pneumaquad.core.control.pid import new_pid_state, pid_update
+from pneumaquad.core.bank import ActuatorArrays, ControllerArrays, scaled_pid_update
+from pneumaquad.core.control.pid import PID_GAINS_DTYPE
 from pneumaquad.core.jit import compiled
-from pneumaquad.core.kernel import rig_rates, step_rigs
-from pneumaquad.core.layout import (
-    ACTUATOR_OUTPUT_DTYPE,
-    ACTUATOR_STATE_DTYPE,
-    SUPPLY_TANK,
-    float_view,
-    state_field_index,
-)
-from pneumaquad.core.physics.force import end_stop_force
-from pneumaquad.core.physics.friction import FRICTION_LUGRE
-from pneumaquad.core.pneumatics import (
-    clear_outputs,
-    finish_outputs,
-    friction_of,
-    supply_pressure_now,
-)
+from pneumaquad.core.kernel import step_rigs
 from pneumaquad.io.interruption import deferred_interrupt
-from pneumaquad.io.recording import RunRecorder
+from pneumaquad.io.run_folder import RunRecorder
 from pneumaquad.params.schema import RigSetup
-from pneumaquad.rig.model import pack_rig_parameters, rig_controller_gains, rig_initial_state
+from pneumaquad.rig.model import rig_bank
 from pneumaquad.rig.recording import (
     N_COLUMNS,
     NORMAL_PRESSURE,
@@ -57,6 +48,7 @@ from pneumaquad.rig.recording import (
     stop_diverged,
     write_row,
 )
+from pneumaquad.rig.reference import ReferenceSolverError, simulate_rig_reference
 
 __all__ = [  # the recording's names are re-exported for the callers of this module
     "NORMAL_PRESSURE",
@@ -73,73 +65,60 @@ __all__ = [  # the recording's names are re-exported for the callers of this mod
     "run_rig_chunk",
     "simulate_rig",
     "simulate_rig_reference",
+    "simulate_rigs",
     "write_row",
 ]
 
 
-class ReferenceSolverError(ValueError):
-    """The adaptive reference cannot integrate this configuration."""
-
-
-#: Names of the kernel states (ACTUATOR_STATE_DTYPE fields), for messages of the
-#: adaptive reference.
-_STATE_NAMES = {
-    "cap_pressure": "cap pressure [Pa]",
-    "rod_pressure": "rod pressure [Pa]",
-    "cap_mass": "cap mass [kg]",
-    "rod_mass": "rod mass [kg]",
-    "spool_voltage": "spool voltage [V]",
-    "bristle_deflection": "bristle deflection [m]",
-    "air_consumed": "air consumed [kg]",
-    "position": "position [m]",
-    "velocity": "velocity [m/s]",
-}
-
-
 @compiled
-def run_rig_chunk(
-    params,
-    state,
-    supply,
-    gains,
-    controller,
-    closed_loop,
-    signal,
-    start,
-    count,
-    control_step,
-    substeps,
-    records,
-):
-    """Run ``count`` control steps from index ``start``; fill records[0:count].
+def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays, closed_loop,
+                  signals, start, count, control_step, substeps, records):
+    """Run ``count`` control steps of N rigs from step ``start``; fill
+    ``records[:, start:start + count]``.
 
-    ``params``, ``state`` and ``supply`` are the rig's arrays of one record
-    (:mod:`pneumaquad.core.layout`); ``gains`` and ``controller`` its PID records.
+    Parameters
+    ----------
+    actuators, controllers : ActuatorArrays, ControllerArrays
+        The bundles of a rig bank (:func:`pneumaquad.rig.model.rig_bank`): N rigs, each
+        with its own supply record, or all on one shared supply record.
+    closed_loop : bool
+        Whether ``signals`` are piston references [m] for the PIDs (else valve commands
+        [V]).
+    signals : ndarray (N, steps)
+        Row i: the signal of rig i per control step.
+    start, count : int
+        First step and number of steps.
+    control_step : float
+        [s].
+    substeps : int
+        Heun substeps per control step.
+    records : ndarray (N, >= start + count) of RIG_ROW_DTYPE
+        Row k of rig i is filled after step k (:func:`write_row`).
     """
-    commands = np.zeros(1)
-    outputs = np.zeros(1, ACTUATOR_OUTPUT_DTYPE)
+    params, state, supply, outputs = actuators
+    commands, references = controllers.commands, controllers.references
+    rigs = params.shape[0]
+    shared = supply.shape[0] == 1
+    scaled = np.empty(1, PID_GAINS_DTYPE)[0]
     for j in range(count):
         k = start + j
-        if closed_loop:
-            reference = signal[k]
-            command = pid_update(gains, controller, reference, state[0].position, control_step)
+        for i in range(rigs):
+            if closed_loop:
+                references[i] = signals[i, k]
+                commands[i] = scaled_pid_update(controllers, i, state[i].position,
+                                                control_step, scaled)
+            else:
+                commands[i] = signals[i, k]
+        if shared:
+            step_rigs(params, state, commands, control_step, substeps, supply, outputs)
         else:
-            reference = math.nan
-            command = signal[k]
-        commands[0] = command
-        step_rigs(params, state, commands, control_step, substeps, supply, outputs)
-        write_row(
-            records,
-            j,
-            (k + 1) * control_step,
-            command,
-            reference,
-            params[0],
-            state[0],
-            outputs[0],
-            supply[0],
-        )
-
+            for i in range(rigs):
+                step_rigs(params[i:i + 1], state[i:i + 1], commands[i:i + 1], control_step,
+                          substeps, supply[i:i + 1], outputs[i:i + 1])
+        for i in range(rigs):
+            reference = references[i] if closed_loop else math.nan
+            write_row(records[i], k, (k + 1) * control_step, commands[i], reference,
+                      params[i], state[i], outputs[i], supply[0 if shared else i])
 
 
 def simulate_rig(
@@ -183,16 +162,90 @@ def simulate_rig(
     """
     if setup.simulation.integrator != "fixed":
         return simulate_rig_reference(setup, signal, closed_loop, recorder, progress)
-    params = pack_rig_parameters(setup)
-    state = rig_initial_state(setup, params)
-    supply = supply_state(setup.actuator)
-    gains = rig_controller_gains(setup)
-    controller = new_pid_state()
-    total = int(signal.shape[0])
-    records, rows = new_rows(total)
-    dt = setup.simulation.control_step
-    substeps = setup.simulation.substeps
-    skipped = skipped_columns(setup, closed_loop)
+    signals = np.asarray(signal, dtype=float).reshape(1, -1)
+    return _simulate_fixed([setup], signals, closed_loop, [recorder], progress,
+                           chunk_steps, several=False)[0]
+
+
+def simulate_rigs(
+    setups: RigSetup | Sequence[RigSetup],
+    signals: np.ndarray,
+    closed_loop: bool,
+    recorders: Sequence[RunRecorder | None] | None = None,
+    progress: ProgressCallback | None = None,
+    chunk_steps: int = 500,
+) -> list[RigResult]:
+    """Simulate N rigs at once, each as :func:`simulate_rig` would alone.
+
+    Parameters
+    ----------
+    setups : RigSetup or sequence of N RigSetup
+        One setup for every rig, or one per rig (e.g. a sweep of supply pressures). They
+        share the integrator, and with the fixed step the control step and substeps.
+    signals : ndarray (N, steps)
+        Row i: rig i's valve command [V] (open loop) or position reference [m] (closed
+        loop) per control step.
+    closed_loop : bool
+        Whether ``signals`` are position references for the PIDs.
+    recorders : sequence of N RunRecorder or None, optional
+        Each rig's recorder (rows as they are computed).
+    progress : callable, optional
+        Called with (steps done, total steps).
+    chunk_steps : int
+        Steps per compiled call; Ctrl-C is honoured between chunks.
+
+    Returns
+    -------
+    list of RigResult
+        One per rig, in order; each recording identical to the rig's run alone. The
+        fixed step advances all rigs in one compiled loop; the adaptive reference runs
+        them one after the other.
+
+    Raises
+    ------
+    ValueError
+        Signals not (N, steps) for N setups, or setups that differ in integrator,
+        control step or substeps.
+    RigDivergedError
+        A rig's recording became non-finite (``rig`` names it; every rig stops there and
+        each recorder has its rig's finite rows).
+    """
+    signals = np.asarray(signals, dtype=float)
+    if signals.ndim != 2:
+        raise ValueError(f"signals should be (rigs, steps), got shape {signals.shape}")
+    count = signals.shape[0]
+    setups = [setups] * count if isinstance(setups, RigSetup) else list(setups)
+    recorders = [None] * count if recorders is None else list(recorders)
+    if len(setups) != count or len(recorders) != count:
+        raise ValueError(f"{count} signal rows for {len(setups)} setups and "
+                         f"{len(recorders)} recorders")
+    integrators = {setup.simulation.integrator for setup in setups}
+    if len(integrators) > 1:
+        raise ValueError(f"rigs run together share simulation.integrator, got "
+                         f"{sorted(integrators)}")
+    if integrators != {"fixed"}:
+        return [simulate_rig_reference(setup, signal, closed_loop, recorder, progress)
+                for setup, signal, recorder in zip(setups, signals, recorders, strict=True)]
+    steps = {(s.simulation.control_step, s.simulation.substeps) for s in setups}
+    if len(steps) > 1:
+        raise ValueError("rigs run together share simulation.control_step and "
+                         f"simulation.substeps, got {sorted(steps)}")
+    return _simulate_fixed(setups, signals, closed_loop, recorders, progress, chunk_steps,
+                           several=True)
+
+
+def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bool,
+                    recorders: list[RunRecorder | None], progress: ProgressCallback | None,
+                    chunk_steps: int, several: bool) -> list[RigResult]:
+    """The fixed-step run of :func:`simulate_rigs` (``several``: name the rig of a
+    divergence)."""
+    bank = rig_bank(setups)
+    rigs, total = signals.shape
+    signals = np.ascontiguousarray(signals, dtype=float)
+    records, rows = new_rows(total, rigs)
+    dt = setups[0].simulation.control_step
+    substeps = setups[0].simulation.substeps
+    skipped = [skipped_columns(setup, closed_loop) for setup in setups]
     done = 0
     interrupted = False
     started = time.perf_counter()
@@ -200,26 +253,9 @@ def simulate_rig(
         try:
             while done < total and not stop.requested:
                 count = min(chunk_steps, total - done)
-                run_rig_chunk(
-                    params,
-                    state,
-                    supply,
-                    gains,
-                    controller,
-                    closed_loop,
-                    np.asarray(signal, dtype=float),
-                    done,
-                    count,
-                    dt,
-                    substeps,
-                    records[done : done + count],
-                )
-                found = first_non_finite(rows[done : done + count], skipped)
-                if found is not None:
-                    row, column = found
-                    stop_diverged(recorder, rows, done, done + row, RIG_COLUMNS[column],
-                                   float(rows[done + row, 0]), started, "fixed")
-                record_rows(recorder, rows[done : done + count])
+                run_rig_chunk(bank.actuator_arrays, bank.controller_arrays, closed_loop,
+                              signals, done, count, dt, substeps, records)
+                _record_chunk(rows, done, count, skipped, recorders, started, several)
                 done += count
                 if progress is not None:
                     progress(done, total)
@@ -227,269 +263,28 @@ def simulate_rig(
             interrupted = True
         interrupted = interrupted or stop.requested
     wall = time.perf_counter() - started
-    return RigResult(as_columns(rows[:done]), interrupted, wall, "fixed")
+    return [RigResult(as_columns(rows[i, :done]), interrupted, wall, "fixed")
+            for i in range(rigs)]
 
 
-def _tolerance_scales(p: np.void) -> np.ndarray:
-    """Typical magnitude of each state (in its unit), to turn the relative atol into
-    absolute ones: a float vector in state-field order (the solver's view)."""
-    scales = np.ones(1, ACTUATOR_STATE_DTYPE)
-    mass = (
-        p["supply_pressure"]
-        * p["cap_area"]
-        * (p["stroke"] + p["cap_dead_length"])
-        / (p["gas_constant"] * p["supply_temperature"])
-    )
-    scales["cap_pressure"] = p["supply_pressure"]
-    scales["rod_pressure"] = p["supply_pressure"]
-    scales["cap_mass"] = mass
-    scales["rod_mass"] = mass
-    scales["spool_voltage"] = 1.0
-    scales["bristle_deflection"] = (
-        max(p["static_force"], 1e-3) / max(p["bristle_stiffness"], 1.0)
-    )
-    scales["air_consumed"] = mass
-    scales["position"] = p["stroke"]
-    scales["velocity"] = 0.1
-    return float_view(scales)[0]
-
-
-def _active_states(p: np.void) -> np.ndarray:
-    """Columns of the solver's state vector (:func:`pneumaquad.core.layout.float_view` of
-    the state record) that the reference ODE integrates for this configuration.
-
-    States that feed nothing back (air consumed; the spool without lag; the bristle
-    outside LuGre; the piston in spacer mode) are left out: their all-zero Jacobian
-    columns make scipy's finite-difference Jacobian scaling overflow and Radau's Newton
-    iteration fail.
-    """
-    names = ["cap_pressure", "rod_pressure", "cap_mass", "rod_mass"]
-    spacer = p["spacer"] != 0
-    if p["spool_time_constant"] > 0.0:
-        names.append("spool_voltage")
-    if p["friction_model"] == FRICTION_LUGRE and not spacer:
-        names.append("bristle_deflection")
-    if not spacer:
-        names += ["position", "velocity"]
-    return np.array([state_field_index(name) for name in names])
-
-
-class _Scratch(NamedTuple):
-    """Buffers of the right-hand side: a state record and its rates (arrays of one
-    ACTUATOR_STATE_DTYPE record) with their float views (the solver's vectors) and the
-    rates' record."""
-
-    state: np.ndarray
-    values: np.ndarray
-    rates: np.ndarray
-    rate_values: np.ndarray
-    rate_record: np.void
-
-
-def _new_scratch() -> _Scratch:
-    state = np.zeros(1, ACTUATOR_STATE_DTYPE)
-    rates = np.zeros(1, ACTUATOR_STATE_DTYPE)
-    return _Scratch(state, float_view(state)[0], rates, float_view(rates)[0], rates[0])
-
-
-def _evaluate(params, command, supply_pressure, scratch: _Scratch) -> np.ndarray:
-    """:func:`~pneumaquad.core.kernel.rig_rates` at the scratch state; the rates as a
-    float vector in state-field order (the scratch's, overwritten by the next call)."""
-    rig_rates(params, scratch.state, command, supply_pressure, scratch.rates)
-    return scratch.rate_values
-
-
-def _active_rates(_time, values, params, full_state, active, command, supply_pressure,
-                  _scales, scratch):
-    """Rates of the active states (scipy signature; the scales are for the Jacobian)."""
-    scratch.values[:] = full_state
-    scratch.values[active] = values
-    return _evaluate(params, command, supply_pressure, scratch)[active]
-
-
-def _active_jacobian(_time, values, params, full_state, active, command, supply_pressure,
-                     scales, scratch):
-    """Forward-difference Jacobian of :func:`_active_rates` with steps set by state scale.
-
-    scipy's own estimate adapts its steps per column and overflows on columns that have no
-    effect at the current state (a chamber's mass at equilibrium, for one), after which
-    Radau's Newton iteration keeps failing. Steps of 1e-7 of each state's typical
-    magnitude avoid that.
-    """
-    state = full_state.copy()
-    state[active] = values
-    scratch.values[:] = state
-    base = _evaluate(params, command, supply_pressure, scratch)[active]
-    jacobian = np.empty((active.size, active.size))
-    for column, index in enumerate(active):
-        step = 1e-7 * max(abs(values[column]), scales[column])
-        scratch.values[:] = state
-        scratch.values[index] += step
-        jacobian[:, column] = _evaluate(params, command, supply_pressure, scratch)[active] - base
-        jacobian[:, column] /= step
-    return jacobian
-
-
-def _drawn_mass(params, full_state, active, times, values, command, supply_pressure,
-                scratch) -> float:
-    """Mass drawn from the supply over an interval: trapezoid rule on the solver's steps."""
-    rates = np.empty(times.size)
-    scratch.values[:] = full_state
-    for index in range(times.size):
-        scratch.values[active] = values[:, index]
-        _evaluate(params, command, supply_pressure, scratch)
-        rates[index] = scratch.rate_record["air_consumed"]
-    return float(np.sum(0.5 * (rates[1:] + rates[:-1]) * np.diff(times)))
-
-
-@compiled
-def finish_reference_interval(params, state, before, supply, outputs, control_step, consumed,
-                              records, index, sample_time, command, reference):
-    """Bookkeeping of a control interval the adaptive solver integrated: the air it
-    consumed, the supply's draw, the outputs and recording row ``index``
-    (:func:`write_row`).
-
-    ``params``, ``state`` (after the interval), ``before`` (the state before it),
-    ``supply`` and ``outputs`` are arrays of one record; ``consumed`` is the air the
-    cylinder drew over the interval [kg] (the solver does not integrate it), added to
-    the state's ``air_consumed`` and drawn from the supply (an isothermal tank loses
-    R·T·m/V).
-    """
-    p = params[0]
-    s = state[0]
-    out = outputs[0]
-    tank = supply[0]
-    s.air_consumed += consumed
-    drawn = s.air_consumed - before[0].air_consumed
-    tank.drawn_mass += drawn
-    if tank.model == SUPPLY_TANK:
-        tank.tank_pressure -= tank.gas_constant * tank.tank_temperature * drawn / tank.tank_volume
-    clear_outputs(out)
-    out.cap_mass_flow = s.cap_mass - before[0].cap_mass
-    out.rod_mass_flow = s.rod_mass - before[0].rod_mass
-    out.supply_mass_flow = drawn
-    finish_outputs(p, s, s.position, control_step, out)
-    if p.spacer != 0:
-        out.end_stop_force = -(out.pneumatic_force + p.gravity_force)
-    else:
-        out.friction_force = friction_of(p, s.velocity, s.bristle_deflection)
-        out.end_stop_force = end_stop_force(
-            s.position, s.velocity, p.stroke, p.end_stop_stiffness, p.end_stop_damping
-        )
-    write_row(records, index, sample_time, command, reference, p, s, out, supply[0])
-
-
-@compiled
-def supply_pressure_of(params, supply) -> float:
-    """:func:`~pneumaquad.core.pneumatics.supply_pressure_now` of a rig's arrays of one
-    record [Pa]."""
-    return supply_pressure_now(params[0], supply[0])
-
-
-def simulate_rig_reference(
-    setup: RigSetup,
-    signal: np.ndarray,
-    closed_loop: bool,
-    recorder: RunRecorder | None = None,
-    progress: ProgressCallback | None = None,
-) -> RigResult:
-    """Adaptive stiff reference: ``scipy.integrate.solve_ivp`` (Radau or LSODA).
-
-    Each control interval is integrated separately with the command held, from the same
-    sampled state as the fixed-step loop, so the two differ only by integration error.
-    The right-hand side is :func:`pneumaquad.core.kernel.rig_rates`, built from the same
-    physics functions as the compiled kernels. (The set-valued Coulomb models have no
-    ODE form; parameter validation refuses them with an adaptive integrator.) The solver
-    sees the rig's state record as a float vector (:func:`~pneumaquad.core.layout.float_view`,
-    the same memory): the edge where named fields become columns.
-    """
-    method = {"radau": "Radau", "lsoda": "LSODA"}.get(setup.simulation.integrator, "Radau")
-    params = pack_rig_parameters(setup)
-    p = params[0]
-    active = _active_states(p)
-    state = rig_initial_state(setup, params)
-    y = float_view(state)[0]  # the solver's view of the state record
-    supply = supply_state(setup.actuator)
-    record = state[0]  # the state record (a view), for reading fields by name
-    gains = rig_controller_gains(setup)
-    controller = new_pid_state()
-    scratch = _new_scratch()
-    dt = setup.simulation.control_step
-    rtol = setup.simulation.relative_tolerance
-    state_scales = _tolerance_scales(p)
-    atol = setup.simulation.absolute_tolerance * state_scales
-    scales = state_scales[active]
-    total = int(signal.shape[0])
-    records, rows = new_rows(total)
-    outputs = np.zeros(1, ACTUATOR_OUTPUT_DTYPE)
-    done = 0
-    flushed = 0
-    interrupted = False
-    started = time.perf_counter()
-    skipped = skipped_columns(setup, closed_loop)
-    with deferred_interrupt() as stop:
-        try:
-            for k in range(total):
-                if stop.requested:
-                    break
-                if closed_loop:
-                    reference = float(signal[k])
-                    command = pid_update(gains, controller, reference, record["position"], dt)
-                else:
-                    reference = math.nan
-                    command = float(signal[k])
-                supply_pressure = supply_pressure_of(params, supply)
-                before = state.copy()
-                scratch.values[:] = y
-                rates = _evaluate(params, command, supply_pressure, scratch)[active]
-                failure = None
-                if not math.isfinite(command):
-                    failure = "command [V]"
-                elif not np.isfinite(rates).all():
-                    column = int(active[~np.isfinite(rates)][0])
-                    failure = f"the rate of {_STATE_NAMES[ACTUATOR_STATE_DTYPE.names[column]]}"
-                else:
-                    try:
-                        solution = solve_ivp(
-                            _active_rates,
-                            (0.0, dt),
-                            y[active],
-                            method=method,
-                            rtol=rtol,
-                            atol=atol[active],
-                            jac=_active_jacobian,
-                            args=(params, y, active, command, supply_pressure, scales, scratch),
-                        )
-                    except ValueError as error:  # scipy refuses NaN/inf in its iteration
-                        failure = f"the solver's iteration ({error})"
-                if failure is not None:
-                    stop_diverged(recorder, rows, flushed, k, failure, k * dt, started,
-                                   setup.simulation.integrator)
-                if not solution.success:
-                    record_rows(recorder, rows[flushed:k])
-                    raise ReferenceSolverError(
-                        f"solve_ivp failed at t = {k * dt:.4f} s: {solution.message}"
-                    )
-                consumed = _drawn_mass(
-                    params, y, active, solution.t, solution.y, command, supply_pressure,
-                    scratch,
-                )
-                y[active] = solution.y[:, -1]
-                finish_reference_interval(params, state, before, supply, outputs, dt, consumed,
-                                          records, k, (k + 1) * dt, command, reference)
-                found = first_non_finite(rows[k : k + 1], skipped)
-                if found is not None:
-                    stop_diverged(recorder, rows, flushed, k, RIG_COLUMNS[found[1]],
-                                   float(rows[k, 0]), started, setup.simulation.integrator)
-                done = k + 1
-                if done - flushed >= 100 or done == total:
-                    record_rows(recorder, rows[flushed:done])
-                    flushed = done
-                    if progress is not None:
-                        progress(done, total)
-        except KeyboardInterrupt:
-            interrupted = True
-        interrupted = interrupted or stop.requested
-        record_rows(recorder, rows[flushed:done])
-    wall = time.perf_counter() - started
-    return RigResult(as_columns(rows[:done]), interrupted, wall, setup.simulation.integrator)
+def _record_chunk(rows: np.ndarray, done: int, count: int, skipped: list[list[int]],
+                  recorders: list[RunRecorder | None], started: float, several: bool) -> None:
+    """Check the chunk's rows of every rig for non-finite values and hand them to the
+    recorders; on one, the finite rows go out and :class:`RigDivergedError` names the rig
+    that diverged first (the earliest row; the lowest index among equals)."""
+    found = [first_non_finite(rows[i, done:done + count], skipped[i])
+             for i in range(rows.shape[0])]
+    diverged = [i for i, where in enumerate(found) if where is not None]
+    for i, recorder in enumerate(recorders):
+        if found[i] is None:
+            record_rows(recorder, rows[i, done:done + count])
+    if not diverged:
+        return
+    first = min(diverged, key=lambda i: found[i][0])
+    for i in diverged:
+        if i != first:
+            record_rows(recorders[i], rows[i, done:done + found[i][0]])
+    row, column = found[first]
+    stop_diverged(recorders[first], rows[first], done, done + row, RIG_COLUMNS[column],
+                  float(rows[first, done + row, 0]), started, "fixed",
+                  first if several else None)
