@@ -61,7 +61,7 @@ from pneumaquad.core.actuator import (
     supply_state,
 )
 from pneumaquad.core.kernel import step_actuators
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.locomotion.stance_control import StanceControlSettings, track_stance_loads
 from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.params import load_actuator, load_robot

@@ -9,7 +9,7 @@ import pytest
 from scipy.io import savemat
 
 from conftest import CLI, interrupt_when_recording
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.params import load_rig
 from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals

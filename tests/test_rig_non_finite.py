@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.params import load_rig
 from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals

@@ -19,7 +19,7 @@ from pneumaquad.console.app import ConsoleApp
 from pneumaquad.console.replay import ReplayRun, Stability
 from pneumaquad.console.scene import StabilityOverlay
 from pneumaquad.gait.stability import stability_margin, support_polygon
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.experiment import run_phases

@@ -10,7 +10,7 @@ from typer.testing import CliRunner
 
 from conftest import CLI
 from pneumaquad.cli.main import app
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.params import ParameterError, load_rig
 
 #: The README's sweep: centered -1.25 ... +0.75 V, at least two points in each port's

@@ -57,7 +57,7 @@ def test_ctrl_c_stops_the_dynamics_server_with_its_files(tmp_path: Path) -> None
     import json
     import socket
 
-    from pneumaquad.io.recording import read_recording
+    from pneumaquad.io.run_folder import read_recording
     from pneumaquad.network.protocol import MessageType, encode_command
 
     out = tmp_path / "served"

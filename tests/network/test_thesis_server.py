@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.network.dynamics_side import DynamicsSide
 from pneumaquad.network.thesis_server import ThesisServer
 from pneumaquad.params import load_robot

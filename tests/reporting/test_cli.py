@@ -8,7 +8,7 @@ import pytest
 from typer.testing import CliRunner
 
 from pneumaquad.cli.main import app
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 
 from .conftest import write_measured_csv
 

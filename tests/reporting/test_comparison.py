@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pneumaquad.io.measured import load_mapping, read_measured
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.reporting import build_run_report, compare_with_measured
 from pneumaquad.reporting.run_folder import ReportError
 

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from conftest import CLI, interrupt_when_recording
 from pneumaquad.cli.main import app
-from pneumaquad.io.recording import read_recording
+from pneumaquad.io.run_folder import read_recording
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.experiment import run_phases
