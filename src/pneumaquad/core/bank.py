@@ -95,7 +95,7 @@ class ControllerArrays(NamedTuple):
 
 @compiled
 def scaled_pid_update(controllers: ControllerArrays, index: int, measurement: float,
-                      sample_time: float, scaled) -> float:
+                      sample_time: float, scaled: np.void) -> float:
     """One PID sample of actuator ``index`` toward ``controllers.references[index]`` [m]
     from the piston position ``measurement`` [m], with Kp, Ki and Kd multiplied by
     ``controllers.gain_scale[index]``; ``scaled`` is a scratch PID_GAINS_DTYPE record.
@@ -173,8 +173,9 @@ class ActuatorBank:
             raise ValueError(f"an actuator bank needs one controller per actuator, got "
                              f"{len(actuators)} actuators and {len(controllers)} controllers")
         if supply_model is not None:
-            actuators = self._updated(actuators, range(len(actuators)), "supply.model",
-                                      [supply_model] * len(actuators))
+            actuators = self._updated(actuators, range(len(actuators)),
+                                      {"supply.model": [supply_model] * len(actuators)},
+                                      "supply model override")
         self._actuators = actuators
         self._controllers = controllers
         n = len(actuators)
@@ -233,17 +234,21 @@ class ActuatorBank:
         return everything if which is None else np.atleast_1d(everything[which])
 
     @staticmethod
-    def _updated(models: list[Any], indices: Any, key: str, values: Sequence[Any]) -> list[Any]:
-        """``models`` with ``key`` set to ``values`` at ``indices``, each validated once
-        per distinct (object, value) pair."""
+    def _updated(models: list[Any], indices: Any, changes: dict[str, Sequence[Any]],
+                 source: str) -> list[Any]:
+        """``models`` with each key of ``changes`` set to its values (one per index) at
+        ``indices``; the changes of one model are validated together, once per distinct
+        (object, values) pair."""
         models = list(models)
-        done: dict[tuple[int, Any], Any] = {}
-        for index, value in zip(indices, values, strict=True):
+        done: dict[tuple[int, tuple[Any, ...]], Any] = {}
+        for position, index in enumerate(indices):
             model = models[index]
-            pair = (id(model), value)
-            if pair not in done:
-                done[pair] = validated_update(model, {key: value}, source=f"{key} update")
-            models[index] = done[pair]
+            values = tuple(column[position] for column in changes.values())
+            key = (id(model), values)
+            if key not in done:
+                done[key] = validated_update(model, dict(zip(changes, values, strict=True)),
+                                             source=source)
+            models[index] = done[key]
         return models
 
     def _repack(self, indices: np.ndarray) -> None:
@@ -270,8 +275,9 @@ class ActuatorBank:
         """
         indices = self._indices(which)
         values = _per_actuator(pressure, indices.size, "supply pressure")
-        self._actuators = self._updated(self._actuators, indices, "supply.supply_pressure",
-                                        [float(v) for v in values])
+        self._actuators = self._updated(
+            self._actuators, indices, {"supply.supply_pressure": [float(v) for v in values]},
+            "supply pressure update")
         self._repack(indices)
 
     def set_gains(self, which: Selection = None, **fields: float) -> None:
@@ -293,10 +299,9 @@ class ActuatorBank:
                                           f"one of {', '.join(GAIN_FIELDS)}")
                                   for name in unknown], source="gains update")
         indices = self._indices(which)
-        controllers = self._controllers
-        for name, value in fields.items():
-            values = _per_actuator(value, indices.size, name)
-            controllers = self._updated(controllers, indices, name, [float(v) for v in values])
+        changes = {name: [float(v) for v in _per_actuator(value, indices.size, name)]
+                   for name, value in fields.items()}
+        controllers = self._updated(self._controllers, indices, changes, "gains update")
         self._controllers = controllers
         for i in indices:
             self.gains[i] = controller_gains(controllers[i], self._actuators[i].valve)
@@ -315,7 +320,8 @@ class ActuatorBank:
         values = [float(v) for v in _per_actuator(scale, indices.size, "gain scale")]
         controllers = list(self._controllers)
         if all("gain_scale" in type(controllers[i]).model_fields for i in indices):
-            controllers = self._updated(controllers, indices, "gain_scale", values)
+            controllers = self._updated(controllers, indices, {"gain_scale": values},
+                                        "gain scale update")
         else:
             for value in values:
                 try:

@@ -23,7 +23,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from pneumaquad.core.bank import ActuatorArrays, ControllerArrays, scaled_pid_update
-from pneumaquad.core.control.pid import PID_GAINS_DTYPE
+from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.kernel import step_rigs
 from pneumaquad.io.interruption import deferred_interrupt
@@ -71,8 +71,9 @@ __all__ = [  # the recording's names are re-exported for the callers of this mod
 
 
 @compiled
-def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays, closed_loop,
-                  signals, start, count, control_step, substeps, records):
+def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
+                  closed_loop: bool, signals: np.ndarray, start: int, count: int,
+                  control_step: float, substeps: int, records: np.ndarray) -> None:
     """Run ``count`` control steps of N rigs from step ``start``; fill
     ``records[:, start:start + count]``.
 
@@ -105,8 +106,12 @@ def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays, clos
         for i in range(rigs):
             if closed_loop:
                 references[i] = signals[i, k]
-                commands[i] = scaled_pid_update(controllers, i, state[i].position,
-                                                control_step, scaled)
+                if controllers.gain_scale[i] == 1.0:  # the same numbers, no scaled copy
+                    commands[i] = pid_update(controllers.gains[i], controllers.pid_state[i],
+                                             references[i], state[i].position, control_step)
+                else:
+                    commands[i] = scaled_pid_update(controllers, i, state[i].position,
+                                                    control_step, scaled)
             else:
                 commands[i] = signals[i, k]
         if shared:
@@ -272,6 +277,15 @@ def _record_chunk(rows: np.ndarray, done: int, count: int, skipped: list[list[in
     """Check the chunk's rows of every rig for non-finite values and hand them to the
     recorders; on one, the finite rows go out and :class:`RigDivergedError` names the rig
     that diverged first (the earliest row; the lowest index among equals)."""
+    if rows.shape[0] == 1:  # one rig: the check and the hand-over, nothing else
+        block = rows[0, done:done + count]
+        where = first_non_finite(block, skipped[0])
+        if where is not None:
+            stop_diverged(recorders[0], rows[0], done, done + where[0],
+                          RIG_COLUMNS[where[1]], float(block[where[0], 0]), started, "fixed",
+                          0 if several else None)
+        record_rows(recorders[0], block)
+        return
     found = [first_non_finite(rows[i, done:done + count], skipped[i])
              for i in range(rows.shape[0])]
     diverged = [i for i, where in enumerate(found) if where is not None]
