@@ -32,6 +32,7 @@ from pneumaquad.core.pneumatics import (
     begin_control_step,
     draw_from_tank,
     finish_outputs,
+    flow_constants,
     friction_of,
     friction_slope_of,
     heun_pneumatics,
@@ -80,13 +81,16 @@ def step_actuators(
         target, lagging, supply_pressure, connections = begin_control_step(
             p, s, out, commands[index], shared
         )
+        constants = flow_constants(p)
         position = positions[index]
         velocity = velocities[index]
         for _ in range(substeps):
             connections = substep_connections(
                 p, s, target, lagging, supply_pressure, connections, h
             )
-            total_drawn += heun_pneumatics(p, s, position, velocity, h, connections, out)
+            total_drawn += heun_pneumatics(
+                p, constants, s, position, velocity, h, connections, out
+            )
             position += h * velocity
         s.bristle_deflection = advance_bristle(p, s.bristle_deflection, velocity, control_step)
         s.position = position
@@ -196,11 +200,14 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
             p, s, out, commands[index], shared
         )
         spacer = p.spacer != 0
+        constants = flow_constants(p)
         for _ in range(substeps):
             connections = substep_connections(
                 p, s, target, lagging, supply_pressure, connections, h
             )
-            total_drawn += heun_pneumatics(p, s, s.position, s.velocity, h, connections, out)
+            total_drawn += heun_pneumatics(
+                p, constants, s, s.position, s.velocity, h, connections, out
+            )
             if not spacer:
                 rig_mechanics_substep(p, s, h, out)
         finish_outputs(p, s, s.position, control_step, out)
@@ -244,6 +251,7 @@ def rig_rates(params, state, command, supply_pressure, rates):
         v = 0.0
     dpc, dpr, fc, fr, draw = pneumatic_rates(
         p,
+        flow_constants(p),
         y.cap_pressure,
         y.rod_pressure,
         max(y.cap_mass, 1e-12),

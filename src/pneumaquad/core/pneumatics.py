@@ -23,10 +23,11 @@ from pneumaquad.core.layout import (
 )
 from pneumaquad.core.physics.chamber import (
     THERMO_HEAT_TRANSFER,
-    chamber_pressure_rate,
+    chamber_pressure_rate_of_exponents,
     chamber_temperature,
     chamber_volume_cap,
     chamber_volume_rod,
+    energy_exponents,
 )
 from pneumaquad.core.physics.force import piston_force
 from pneumaquad.core.physics.friction import (
@@ -38,9 +39,10 @@ from pneumaquad.core.physics.friction import (
 )
 from pneumaquad.core.physics.orifice import (
     area_to_sonic_conductance,
-    iso6358_flux,
-    laminar_temperature,
-    orifice_flux,
+    iso6358_flux_of_ratio,
+    iso6358_scale,
+    laminar_temperature_of_ratio,
+    orifice_flux_of_ratio,
 )
 from pneumaquad.core.physics.valve import (
     centered_voltage,
@@ -126,62 +128,74 @@ def valve_connections(p, centered: float, supply_pressure: float):
 
 
 @compiled
-def flow_temperature(p, source_pressure, pressure, temperature):
-    """Temperature of the air crossing a port [K]: supply temperature when filling, the
-    chamber's when emptying, blended to their mean near equal pressures (see
-    :func:`pneumaquad.core.physics.orifice.laminar_temperature`), so that flow and energy
-    balance stay smooth through zero flow."""
-    if source_pressure >= pressure:
-        return laminar_temperature(
-            source_pressure, pressure, p.supply_temperature, temperature,
-            p.laminar_pressure_ratio,
-        )
-    return laminar_temperature(
-        pressure, source_pressure, temperature, p.supply_temperature, p.laminar_pressure_ratio
+def flow_constants(p):
+    """The actuator's constants of the port flows and the energy balance.
+
+    Returns (1/k, inflow coefficient, compression exponent) of eq 4.1.5 and 4.1.10 (see
+    :func:`pneumaquad.core.physics.chamber.energy_exponents`). The kernels compute them
+    once per actuator and control step and pass them to :func:`pneumatic_rates`, instead
+    of dividing again at each of its evaluations.
+    """
+    flow_coefficient, compression = energy_exponents(
+        p.thermo_model,
+        p.heat_capacity_ratio,
+        p.gas_constant,
+        p.specific_heat_cp,
+        p.polytropic_exponent,
     )
+    return 1.0 / p.heat_capacity_ratio, flow_coefficient, compression
 
 
 @compiled
-def port_flow(p, conductance, source_pressure, pressure, crossing_temperature):
-    """Mass flow into a chamber from its valve port [kg/s].
+def port_flow(p, constants, conductance, source_pressure, pressure, temperature):
+    """Mass flow into a chamber from its valve port [kg/s] and the temperature of the air
+    crossing the port [K].
 
-    The same law as :func:`pneumaquad.core.physics.orifice.orifice_mass_flow` (or the ISO 6358
-    form), with the temperature of the crossing air from :func:`flow_temperature` passed
-    in, since the energy balance needs it too.
+    The same law as :func:`pneumaquad.core.physics.orifice.orifice_mass_flow` (or the ISO
+    6358 form). The crossing air is at supply temperature when filling and at the
+    chamber's ``temperature`` when emptying, blended to their mean near equal pressures
+    (:func:`pneumaquad.core.physics.orifice.laminar_temperature`), so that flow and energy
+    balance stay smooth through zero flow; the energy balance needs that temperature too.
+    The pressure ratio is computed once for both. ``constants`` is :func:`flow_constants`.
     """
     if source_pressure >= pressure:
         upstream, downstream, sign = source_pressure, pressure, 1.0
+        upstream_temperature, downstream_temperature = p.supply_temperature, temperature
     else:
         upstream, downstream, sign = pressure, source_pressure, -1.0
+        upstream_temperature, downstream_temperature = temperature, p.supply_temperature
+    if upstream <= 0.0:
+        return sign * conductance * 0.0, upstream_temperature
+    ratio = downstream / upstream
+    crossing = laminar_temperature_of_ratio(
+        ratio, upstream_temperature, downstream_temperature, p.laminar_pressure_ratio
+    )
     if p.flow_form == FLOW_ISO6358:
-        return (
-            sign
-            * conductance
-            * iso6358_flux(
-                upstream, downstream, crossing_temperature, p.iso_critical_ratio,
-                p.laminar_pressure_ratio,
-            )
+        flux = iso6358_flux_of_ratio(
+            ratio,
+            iso6358_scale(upstream, crossing),
+            p.iso_critical_ratio,
+            p.laminar_pressure_ratio,
         )
-    return (
-        sign
-        * conductance
-        * orifice_flux(
-            upstream,
-            downstream,
-            crossing_temperature,
-            p.heat_capacity_ratio,
+    else:
+        flux = orifice_flux_of_ratio(
+            ratio,
+            upstream / math.sqrt(crossing),
+            constants[0],
             p.unchoked_flow_constant,
             p.choked_flow_constant,
             p.critical_pressure_ratio,
             p.laminar_pressure_ratio,
         )
-    )
+    return sign * conductance * flux, crossing
 
 
 @compiled
-def chamber_rate(p, pressure, temperature, volume, volume_rate, flow_in, flow_temp, wall_area):
+def chamber_rate(
+    p, constants, pressure, temperature, volume, volume_rate, flow_in, flow_temp, wall_area
+):
     """dP/dt of one chamber (eq 4.1.10) given its temperature and net inflow."""
-    return chamber_pressure_rate(
+    return chamber_pressure_rate_of_exponents(
         pressure,
         volume,
         volume_rate,
@@ -189,11 +203,11 @@ def chamber_rate(p, pressure, temperature, volume, volume_rate, flow_in, flow_te
         flow_temp,
         temperature,
         wall_area,
+        constants[1],
+        constants[2],
         p.heat_capacity_ratio,
         p.gas_constant,
-        p.specific_heat_cp,
         p.thermo_model,
-        p.polytropic_exponent,
         p.heat_transfer_coefficient,
         p.wall_temperature,
     )
@@ -202,6 +216,7 @@ def chamber_rate(p, pressure, temperature, volume, volume_rate, flow_in, flow_te
 @compiled
 def pneumatic_rates(
     p,
+    constants,
     cap_pressure,
     rod_pressure,
     cap_mass,
@@ -215,17 +230,19 @@ def pneumatic_rates(
 ):
     """Rates of the four chamber states and the supply draw for one actuator.
 
-    Returns (dP_cap/dt [Pa/s], dP_rod/dt [Pa/s], m_dot_cap [kg/s], m_dot_rod [kg/s],
-    supply draw [kg/s]).
+    ``constants`` is :func:`flow_constants` of ``p``. Returns (dP_cap/dt [Pa/s],
+    dP_rod/dt [Pa/s], m_dot_cap [kg/s], m_dot_rod [kg/s], supply draw [kg/s]).
     """
     cap_volume = chamber_volume_cap(position, p.cap_area, p.cap_dead_length)
     rod_volume = chamber_volume_rod(position, p.stroke, p.rod_area, p.rod_dead_length)
     cap_temperature = chamber_temperature(cap_pressure, cap_volume, cap_mass, p.gas_constant)
     rod_temperature = chamber_temperature(rod_pressure, rod_volume, rod_mass, p.gas_constant)
-    cap_crossing = flow_temperature(p, cap_source, cap_pressure, cap_temperature)
-    rod_crossing = flow_temperature(p, rod_source, rod_pressure, rod_temperature)
-    cap_flow = port_flow(p, cap_conductance, cap_source, cap_pressure, cap_crossing)
-    rod_flow = port_flow(p, rod_conductance, rod_source, rod_pressure, rod_crossing)
+    cap_flow, cap_crossing = port_flow(
+        p, constants, cap_conductance, cap_source, cap_pressure, cap_temperature
+    )
+    rod_flow, rod_crossing = port_flow(
+        p, constants, rod_conductance, rod_source, rod_pressure, rod_temperature
+    )
     cap_wall = 0.0
     rod_wall = 0.0
     if p.thermo_model == THERMO_HEAT_TRANSFER:
@@ -234,6 +251,7 @@ def pneumatic_rates(
         rod_wall = end_faces + math.pi * p.bore * rod_volume / p.rod_area
     cap_rate = chamber_rate(
         p,
+        constants,
         cap_pressure,
         cap_temperature,
         cap_volume,
@@ -244,6 +262,7 @@ def pneumatic_rates(
     )
     rod_rate = chamber_rate(
         p,
+        constants,
         rod_pressure,
         rod_temperature,
         rod_volume,
@@ -269,10 +288,11 @@ def spool_update(p, spool: float, target: float, time_step: float) -> float:
 
 
 @compiled
-def heun_pneumatics(p, s, position, velocity, time_step, connections, out):
+def heun_pneumatics(p, constants, s, position, velocity, time_step, connections, out):
     """One Heun substep of the chamber states with the piston moving at constant velocity.
 
-    ``connections`` is the tuple of :func:`valve_connections` for the substep. Updates s
+    ``constants`` is :func:`flow_constants` of ``p``, ``connections`` the tuple of
+    :func:`valve_connections` for the substep. Updates s
     in place; adds time_step-weighted flows to ``out.cap_mass_flow``, ``out.rod_mass_flow``
     and ``out.supply_mass_flow`` (callers divide by the step length).
     """
@@ -283,6 +303,7 @@ def heun_pneumatics(p, s, position, velocity, time_step, connections, out):
     mr = s.rod_mass
     dpc1, dpr1, fc1, fr1, draw1 = pneumatic_rates(
         p,
+        constants,
         pc,
         pr,
         mc,
@@ -301,6 +322,7 @@ def heun_pneumatics(p, s, position, velocity, time_step, connections, out):
     mr_pred = max(mr + h * fr1, 1e-12)
     dpc2, dpr2, fc2, fr2, draw2 = pneumatic_rates(
         p,
+        constants,
         pc_pred,
         pr_pred,
         mc_pred,

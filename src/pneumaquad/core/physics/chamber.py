@@ -128,12 +128,67 @@ def chamber_pressure_rate(
     float
         dP/dt [Pa/s].
     """
+    flow_coefficient, compression = energy_exponents(
+        thermo_model, heat_capacity_ratio, gas_constant, specific_heat_cp, polytropic_exponent
+    )
+    return chamber_pressure_rate_of_exponents(
+        pressure,
+        volume,
+        volume_rate,
+        mass_flow_in,
+        flow_temperature,
+        chamber_temp,
+        wall_area,
+        flow_coefficient,
+        compression,
+        heat_capacity_ratio,
+        gas_constant,
+        thermo_model,
+        heat_transfer_coefficient,
+        wall_temperature,
+    )
+
+
+@compiled
+def energy_exponents(
+    thermo_model: int,
+    heat_capacity_ratio: float,
+    gas_constant: float,
+    specific_heat_cp: float,
+    polytropic_exponent: float,
+) -> tuple[float, float]:
+    """Coefficients of the inflow and of the compression term in eq 4.1.10.
+
+    Returns
+    -------
+    (float, float)
+        (k, k·R/cp + 1), or (n, n) for the polytropic model (see
+        :func:`chamber_pressure_rate`).
+    """
     if thermo_model == THERMO_POLYTROPIC:
-        flow_coefficient = polytropic_exponent
-        compression = polytropic_exponent
-    else:
-        flow_coefficient = heat_capacity_ratio
-        compression = heat_capacity_ratio * gas_constant / specific_heat_cp + 1.0
+        return polytropic_exponent, polytropic_exponent
+    return heat_capacity_ratio, heat_capacity_ratio * gas_constant / specific_heat_cp + 1.0
+
+
+@compiled
+def chamber_pressure_rate_of_exponents(
+    pressure: float,
+    volume: float,
+    volume_rate: float,
+    mass_flow_in: float,
+    flow_temperature: float,
+    chamber_temp: float,
+    wall_area: float,
+    flow_coefficient: float,
+    compression: float,
+    heat_capacity_ratio: float,
+    gas_constant: float,
+    thermo_model: int,
+    heat_transfer_coefficient: float,
+    wall_temperature: float,
+) -> float:
+    """:func:`chamber_pressure_rate` with the coefficients of :func:`energy_exponents`
+    given, for callers that compute them once per step rather than per evaluation."""
     rate = (
         flow_coefficient * gas_constant * flow_temperature * mass_flow_in
         - compression * pressure * volume_rate

@@ -74,13 +74,52 @@ def orifice_flux(
     """
     if upstream_pressure <= 0.0:
         return 0.0
-    ratio = downstream_pressure / upstream_pressure
-    scale = upstream_pressure / math.sqrt(upstream_temperature)
+    return orifice_flux_of_ratio(
+        downstream_pressure / upstream_pressure,
+        upstream_pressure / math.sqrt(upstream_temperature),
+        1.0 / heat_capacity_ratio,
+        c1,
+        c2,
+        critical_ratio,
+        laminar_ratio,
+    )
+
+
+@compiled
+def orifice_flux_of_ratio(
+    ratio: float,
+    scale: float,
+    inverse_k: float,
+    c1: float,
+    c2: float,
+    critical_ratio: float,
+    laminar_ratio: float,
+) -> float:
+    """:func:`orifice_flux` from its intermediate quantities, for callers that have them.
+
+    The actuator kernels compute the pressure ratio once per port for the flow and its
+    temperature (:func:`laminar_temperature_of_ratio`), and 1/k once per control step.
+
+    Parameters
+    ----------
+    ratio : float
+        Pd/Pu, with Pu > 0 [-].
+    scale : float
+        Pu / sqrt(Tu) [Pa/sqrt(K)].
+    inverse_k : float
+        1/k [-].
+    c1, c2, critical_ratio, laminar_ratio : float
+        See :func:`orifice_flux`.
+
+    Returns
+    -------
+    float
+        Psi [kg/(s m^2)].
+    """
     if ratio <= critical_ratio:
         return c2 * scale
     if ratio >= 1.0:
         return 0.0
-    inverse_k = 1.0 / heat_capacity_ratio
     if ratio > laminar_ratio:
         power = laminar_ratio**inverse_k
         at_limit = c1 * scale * power * math.sqrt(1.0 - laminar_ratio / power)
@@ -183,7 +222,22 @@ def laminar_temperature(
     """
     if upstream_pressure <= 0.0:
         return upstream_temperature
-    ratio = downstream_pressure / upstream_pressure
+    return laminar_temperature_of_ratio(
+        downstream_pressure / upstream_pressure,
+        upstream_temperature,
+        downstream_temperature,
+        laminar_ratio,
+    )
+
+
+@compiled
+def laminar_temperature_of_ratio(
+    ratio: float,
+    upstream_temperature: float,
+    downstream_temperature: float,
+    laminar_ratio: float,
+) -> float:
+    """:func:`laminar_temperature` from the pressure ratio Pd/Pu (Pu > 0) [-]."""
     if ratio <= laminar_ratio:
         return upstream_temperature
     weight = min((ratio - laminar_ratio) / (1.0 - laminar_ratio), 1.0)
@@ -222,12 +276,30 @@ def iso6358_flux(
     """
     if upstream_pressure <= 0.0:
         return 0.0
-    ratio = downstream_pressure / upstream_pressure
-    scale = (
+    return iso6358_flux_of_ratio(
+        downstream_pressure / upstream_pressure,
+        iso6358_scale(upstream_pressure, upstream_temperature),
+        critical_ratio,
+        laminar_ratio,
+    )
+
+
+@compiled
+def iso6358_scale(upstream_pressure: float, upstream_temperature: float) -> float:
+    """rho0 · Pu · sqrt(T0/Tu) of :func:`iso6358_flux` [kg/m^3 Pa]."""
+    return (
         ISO_REFERENCE_DENSITY
         * upstream_pressure
         * math.sqrt(ISO_REFERENCE_TEMPERATURE / upstream_temperature)
     )
+
+
+@compiled
+def iso6358_flux_of_ratio(
+    ratio: float, scale: float, critical_ratio: float, laminar_ratio: float
+) -> float:
+    """:func:`iso6358_flux` from the pressure ratio Pd/Pu (Pu > 0) and
+    :func:`iso6358_scale`."""
     if ratio <= critical_ratio:
         return scale
     if ratio >= 1.0:
