@@ -70,6 +70,22 @@ def step_actuators(
         Filled with mean flows, end-of-step forces (pneumatic and friction, the latter at
         the given velocity) and temperatures.
     """
+    advance_actuators(params, state, commands, positions, velocities, control_step, substeps,
+                      supply, outputs, True)
+
+
+@compiled
+def advance_actuators(
+    params, state, commands, positions, velocities, control_step, substeps, supply, outputs,
+    friction_output,
+):
+    """:func:`step_actuators`, with the friction force output optional.
+
+    With ``friction_output`` False, ``outputs.friction_force`` is left at zero and the
+    friction law (a Stribeck curve and a tanh per actuator) is not evaluated: the robot's
+    coupling reads its seal friction from MuJoCo's solver or evaluates the law itself at
+    the present velocity, so it never reads this output.
+    """
     count = params.shape[0]
     h = control_step / substeps
     total_drawn = 0.0
@@ -96,7 +112,8 @@ def step_actuators(
         s.position = position
         s.velocity = velocity
         finish_outputs(p, s, position, control_step, out)
-        out.friction_force = friction_of(p, velocity, s.bristle_deflection)
+        if friction_output:
+            out.friction_force = friction_of(p, velocity, s.bristle_deflection)
     draw_from_tank(shared, total_drawn)
 
 

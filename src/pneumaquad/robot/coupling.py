@@ -32,7 +32,7 @@ import numpy as np
 from pneumaquad.core.bank import ActuatorArrays
 from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update
 from pneumaquad.core.jit import compiled
-from pneumaquad.core.kernel import step_actuators
+from pneumaquad.core.kernel import advance_actuators
 from pneumaquad.core.physics.friction import stribeck_curve
 from pneumaquad.core.pneumatics import friction_of, friction_slope_of, state_outputs
 
@@ -184,8 +184,8 @@ def sample_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Act
         for i in range(count):
             s = state[i]
             s.velocity = (positions[i] - s.position) / dt
-        step_actuators(params, state, trace.commands, state.position, state.velocity, dt,
-                       settings.substeps, actuators.supply, outputs)
+        advance_actuators(params, state, trace.commands, state.position, state.velocity, dt,
+                          settings.substeps, actuators.supply, outputs, False)
         coupling[0].pending = 0
     else:
         for i in range(count):
