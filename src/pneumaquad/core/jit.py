@@ -93,13 +93,27 @@ class PackageFunctionCache(FunctionCache):
     _impl_class = _PackageCacheImpl
 
 
-def compiled(function: Callable[..., Any]) -> Callable[..., Any]:
+def compiled(
+    function: Callable[..., Any] | None = None, *, inline: bool = False
+) -> Callable[..., Any]:
     """Compile ``function`` with ``njit(error_model="numpy")``, cached in :func:`cache_folder`.
 
     The decorator of every compiled function of the package. Where the cache folder cannot
     be created or written, the function is compiled afresh in each process instead.
+
+    ``@compiled(inline=True)`` also inlines the function's body into its compiled callers
+    (numba's ``inline="always"``, at numba's IR level); called from Python it compiles
+    and caches like any other. For the functions of the robot's control step, which pass
+    bundles of arrays down a chain of calls: each compiled call boundary takes a reference
+    to every array it receives and releases it on return (atomic reference counting,
+    tens of arrays per control step), which inlining removes.
     """
-    dispatcher = njit(error_model="numpy")(function)
+    if function is None:
+        return functools.partial(compiled, inline=inline)
+    options: dict[str, Any] = {"error_model": "numpy"}
+    if inline:
+        options["inline"] = "always"
+    dispatcher = njit(**options)(function)
     if isinstance(dispatcher, Dispatcher):  # a plain function under NUMBA_DISABLE_JIT
         try:
             cache = PackageFunctionCache(function)

@@ -74,7 +74,7 @@ def step_actuators(
                       supply, outputs, True)
 
 
-@compiled
+@compiled(inline=True)
 def advance_actuators(
     params, state, commands, positions, velocities, control_step, substeps, supply, outputs,
     friction_output,

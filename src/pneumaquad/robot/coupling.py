@@ -152,7 +152,7 @@ def set_seal_friction(mujoco: MujocoBuffers, seal, index: int) -> None:
     mujoco.tendon_damping[tendon] = row.viscous_coefficient
 
 
-@compiled
+@compiled(inline=True)
 def sample_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: ActuatorArrays,
                      trace: StepTrace, coupling, settings: StepSettings) -> int:
     """Read the pistons from the present kinematics and bring the chambers up to date.
@@ -203,7 +203,7 @@ def sample_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Act
     return bad
 
 
-@compiled
+@compiled(inline=True)
 def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: ActuatorArrays,
                       controllers: Controllers, trace: StepTrace,
                       settings: StepSettings) -> None:
@@ -296,7 +296,7 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
         mujoco.control[mujoco.actuator_ids[i]] = force
 
 
-@compiled
+@compiled(inline=True)
 def robot_control_step(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: ActuatorArrays,
                        controllers: Controllers, trace: StepTrace, coupling,
                        settings: StepSettings) -> int:
