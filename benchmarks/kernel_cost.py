@@ -33,7 +33,12 @@ from _bench import Stats, machine_line, run_child, stats, table, write_json
 from pneumaquad.core import layout
 from pneumaquad.core.actuator import initial_state, new_outputs, pack_parameters, supply_state
 from pneumaquad.core.kernel import step_actuators
-from pneumaquad.core.pneumatics import pneumatic_rates, port_flow, valve_connections
+from pneumaquad.core.pneumatics import (
+    flow_constants,
+    pneumatic_rates,
+    port_flow,
+    valve_connections,
+)
 from pneumaquad.params import load_actuator, load_rig
 
 TARGET_NS = 1000.0
@@ -154,9 +159,11 @@ def valve_loop(p, centered, supply_pressure):
 def rates_loop(p, pressures, velocities, source, conductance):
     total = 0.0
     mass = 4e-5
+    constants = flow_constants(p)  # once per actuator and control step in the kernels
     for i in range(pressures.shape[0]):
         dpc, dpr, fc, fr, draw = pneumatic_rates(
             p,
+            constants,
             pressures[i],
             pressures[-1 - i],
             mass,
@@ -175,8 +182,10 @@ def rates_loop(p, pressures, velocities, source, conductance):
 @njit(cache=False)
 def flow_loop(p, upstream, downstream):
     total = 0.0
+    constants = flow_constants(p)
     for i in range(upstream.shape[0]):
-        total += port_flow(p, 5e-7, upstream[i], downstream[i], 298.0)
+        flow, crossing = port_flow(p, constants, 5e-7, upstream[i], downstream[i], 298.0)
+        total += flow + crossing
     return total
 
 
