@@ -12,6 +12,7 @@ on this experiment; a 1e-12 rad bound is kept for that case.
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from collections.abc import Iterator
 
@@ -75,13 +76,17 @@ def test_in_process_lockstep_equals_the_coupled_simulation(reference: np.ndarray
     assert difference <= TOLERANCE, f"max angle difference {difference:.3g} rad"
 
 
-def test_the_actuator_side_makes_no_mujoco_data(monkeypatch: pytest.MonkeyPatch) -> None:
-    robot = _robot()
+def test_the_actuator_side_builds_no_mujoco(monkeypatch: pytest.MonkeyPatch) -> None:
+    """From the joints alone (robot_joints): no MjSpec, no compiled MjModel, no MjData."""
+    from pneumaquad.params import load_robot
+    from pneumaquad.robot.builder import robot_joints
 
-    def refuse(*_args: object) -> None:
-        raise AssertionError("the actuator side made a mujoco.MjData")
+    def refuse(*_args: object, **_kwargs: object) -> None:
+        raise AssertionError("the actuator side used MuJoCo")
 
-    monkeypatch.setattr(mujoco, "MjData", refuse)
+    for name in ("MjData", "MjSpec", "MjModel"):
+        monkeypatch.setattr(mujoco, name, refuse)
+    robot = robot_joints(load_robot("crr-quadruped"), "quadruped")
     side = ActuatorSide(robot)
     side.set_pose(POSE)
     side.command_angles(POSE)
@@ -94,6 +99,17 @@ def test_the_actuator_side_makes_no_mujoco_data(monkeypatch: pytest.MonkeyPatch)
     forces = side.forces(state)
     assert forces.shape == (12,) and np.all(np.isfinite(forces))
     assert side.bank.count == 12 and side.air_consumed() == 0.0
+
+
+def test_the_joints_alone_equal_the_built_robots() -> None:
+    from pneumaquad.params import load_robot
+    from pneumaquad.robot.builder import RobotJoints, build_robot, robot_joints
+
+    parameters = load_robot("crr-quadruped")
+    built = build_robot(parameters, "quadruped")
+    alone = robot_joints(parameters, "quadruped")
+    for field in dataclasses.fields(RobotJoints):
+        assert getattr(built, field.name) == getattr(alone, field.name), field.name
 
 
 def test_geometric_pistons_stay_within_the_tolerance(reference: np.ndarray) -> None:

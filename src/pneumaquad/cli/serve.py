@@ -46,14 +46,17 @@ def _fail(message: str, status: int = 2) -> None:
     raise typer.Exit(status)
 
 
-def _robot(params: str, overrides: list[str] | None, configuration: str):
+def _robot(params: str, overrides: list[str] | None, configuration: str,
+           build: bool = True):
+    """The robot of ``params``: built in MuJoCo, or (``build=False``) its joints only."""
     from pneumaquad.params import load_robot
-    from pneumaquad.robot.builder import CONFIGURATIONS, build_robot
+    from pneumaquad.robot.builder import CONFIGURATIONS, build_robot, robot_joints
 
     if configuration not in CONFIGURATIONS:
         _fail(f"--configuration {configuration!r}: expected one of {', '.join(CONFIGURATIONS)}")
     try:
-        return build_robot(load_robot(params, overrides or []), configuration)
+        parameters = load_robot(params, overrides or [])
+        return (build_robot if build else robot_joints)(parameters, configuration)
     except (ParameterError, ValueError, FileNotFoundError) as error:
         _fail(str(error))
 
@@ -238,7 +241,7 @@ def serve_actuators(
     if experiment not in EXPERIMENTS:
         _fail(f"--experiment {experiment!r}: expected one of {', '.join(EXPERIMENTS)}")
     address = _address(dynamics, "--dynamics")
-    robot = _robot(params, overrides, configuration)
+    robot = _robot(params, overrides, configuration, build=False)  # no MuJoCo on this side
     try:
         side = ActuatorSide(robot)
     except ValueError as error:

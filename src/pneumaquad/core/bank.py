@@ -43,6 +43,7 @@ from pneumaquad.core.control.pid import (
     controller_gains,
     new_pid_state,
     pid_update,
+    scale_gains,
 )
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.layout import (
@@ -100,16 +101,7 @@ def scaled_pid_update(controllers: ControllerArrays, index: int, measurement: fl
     from the piston position ``measurement`` [m], with Kp, Ki and Kd multiplied by
     ``controllers.gain_scale[index]``; ``scaled`` is a scratch PID_GAINS_DTYPE record.
     Returns the valve command [V] (not stored)."""
-    gains = controllers.gains[index]
-    scale = controllers.gain_scale[index]
-    scaled.proportional_gain = gains.proportional_gain * scale
-    scaled.integral_gain = gains.integral_gain * scale
-    scaled.derivative_gain = gains.derivative_gain * scale
-    scaled.derivative_filter_time_constant = gains.derivative_filter_time_constant
-    scaled.integral_limit = gains.integral_limit
-    scaled.offset_voltage = gains.offset_voltage
-    scaled.min_voltage = gains.min_voltage
-    scaled.max_voltage = gains.max_voltage
+    scale_gains(controllers.gains[index], controllers.gain_scale[index], scaled)
     return pid_update(scaled, controllers.pid_state[index], controllers.references[index],
                       measurement, sample_time)
 

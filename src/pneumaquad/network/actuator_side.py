@@ -26,7 +26,7 @@ import numpy as np
 
 from pneumaquad.core.bank import ActuatorBank
 from pneumaquad.network.state import StateMessage
-from pneumaquad.robot.builder import RobotModel
+from pneumaquad.robot.builder import RobotJoints
 from pneumaquad.robot.coupling import MujocoBuffers, robot_control_step
 from pneumaquad.robot.joints import CylinderJoints
 
@@ -39,7 +39,8 @@ class ActuatorSide:
     Parameters
     ----------
     robot
-        From :func:`pneumaquad.robot.builder.build_robot` (the same parameters as the
+        From :func:`pneumaquad.robot.builder.robot_joints` (no MuJoCo model is needed)
+        or :func:`~pneumaquad.robot.builder.build_robot` (the same parameters as the
         dynamics side); only its parameters, joint list, actuator files and linkages are
         read: no MuJoCo data is made.
     supply
@@ -52,7 +53,7 @@ class ActuatorSide:
         MuJoCo tendon damping, which a ``FORCE_COMMAND`` cannot carry.
     """
 
-    def __init__(self, robot: RobotModel, supply: str | None = None) -> None:
+    def __init__(self, robot: RobotJoints, supply: str | None = None) -> None:
         if robot.parameters.simulation.seal_friction != "mujoco":
             raise ValueError(
                 'the networked actuator side needs simulation.seal_friction = "mujoco" '

@@ -100,8 +100,12 @@ def write_network_files(folder: Path, log: PacketLog, control_step: float,
 
 def write_run_description(folder: Path, robot: Any, summary: Mapping[str, Any]) -> None:
     """Write ``parameters.toml``, ``model.xml`` and ``summary.json`` of a networked run, so
-    that ``pneumaquad report`` and ``pneumaquad video`` read it like any robot run."""
+    that ``pneumaquad report`` and ``pneumaquad video`` read it like any robot run.
+
+    ``model.xml`` comes from a built robot (the dynamics side); the actuator side holds
+    the joints only (:func:`pneumaquad.robot.builder.robot_joints`) and writes none."""
     writer = RunFolderWriter(folder)
     writer.write_parameters(robot.parameters)
-    writer.write_model(robot.to_xml())
+    if hasattr(robot, "to_xml"):
+        writer.write_model(robot.to_xml())
     writer.write_summary(summary)

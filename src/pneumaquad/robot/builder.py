@@ -21,7 +21,7 @@ Configurations (thesis 5.4, 3.1.2):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import mujoco
 import numpy as np
@@ -46,16 +46,18 @@ SEAL_FRICTION_TIME_CONSTANT = 0.002
 
 
 @dataclass(frozen=True)
-class RobotModel:
-    """A compiled robot model and the indices the simulation needs.
+class RobotJoints:
+    """The robot's cylinder-driven joints as its parameters define them, without MuJoCo.
+
+    What the actuators and controllers of the joints need (the network actuator side
+    builds its cylinders from this alone, :func:`robot_joints`).
 
     Attributes
     ----------
-    model : mujoco.MjModel
     parameters : RobotParameters
     actuators : dict
         Joint type → its actuator parameters.
-    configuration, environment : str
+    configuration : str
     legs : tuple of str
         Legs present, in :data:`LEG_NAMES` order.
     joint_names : tuple of str
@@ -64,27 +66,15 @@ class RobotModel:
         ``"alpha"``, ``"beta"`` or ``"gamma"`` per simulated joint.
     linkages : dict
         Joint type → :class:`Linkage`.
-    qpos_address, dof_address, tendon_id, actuator_id, foot_site_id : ndarray of int
-        Per simulated joint (feet: per leg).
     """
 
-    model: mujoco.MjModel
     parameters: RobotParameters
     actuators: dict[str, ActuatorParameters]
     configuration: str
-    environment: str
     legs: tuple[str, ...]
     joint_names: tuple[str, ...]
     joint_types: tuple[str, ...]
     linkages: dict[str, Linkage]
-    qpos_address: np.ndarray = field(repr=False)
-    dof_address: np.ndarray = field(repr=False)
-    tendon_id: np.ndarray = field(repr=False)
-    actuator_id: np.ndarray = field(repr=False)
-    foot_site_id: np.ndarray = field(repr=False)
-    thorax_id: int = 0
-    free: bool = False
-    xml: str = field(default="", repr=False)
 
     @property
     def joint_count(self) -> int:
@@ -98,6 +88,46 @@ class RobotModel:
     def upper_limits(self) -> np.ndarray:
         """Joint upper limits [rad], per simulated joint."""
         return np.array([getattr(self.parameters.leg, t).upper_limit for t in self.joint_types])
+
+
+def robot_joints(parameters: RobotParameters, configuration: str = "quadruped") -> RobotJoints:
+    """The joints of ``configuration`` (one of :data:`CONFIGURATIONS`): actuator files
+    loaded, linkages as given or designed from the stroke; no MuJoCo model is built."""
+    if configuration not in CONFIGURATIONS:
+        raise ValueError(f"configuration {configuration!r} should be one of {CONFIGURATIONS}")
+    actuators = {name: load_actuator(getattr(parameters.actuators, name))
+                 for name in JOINT_NAMES}
+    legs = LEG_NAMES if configuration != "testbed" else ("front_left", "front_right")
+    names = tuple(f"{leg}_{joint}" for leg in legs for joint in JOINT_NAMES)
+    return RobotJoints(
+        parameters=parameters, actuators=actuators, configuration=configuration, legs=legs,
+        joint_names=names, joint_types=tuple(n.rsplit("_", 1)[1] for n in names),
+        linkages=leg_linkages(parameters, actuators))
+
+
+@dataclass(frozen=True)
+class RobotModel(RobotJoints):
+    """A compiled robot model: its joints (:class:`RobotJoints`) and the MuJoCo model with
+    the indices the simulation needs.
+
+    Attributes
+    ----------
+    model : mujoco.MjModel
+    environment : str
+    qpos_address, dof_address, tendon_id, actuator_id, foot_site_id : ndarray of int
+        Per simulated joint (feet: per leg).
+    """
+
+    model: mujoco.MjModel = field(default=None, repr=False)
+    environment: str = "flat"
+    qpos_address: np.ndarray = field(default=None, repr=False)
+    dof_address: np.ndarray = field(default=None, repr=False)
+    tendon_id: np.ndarray = field(default=None, repr=False)
+    actuator_id: np.ndarray = field(default=None, repr=False)
+    foot_site_id: np.ndarray = field(default=None, repr=False)
+    thorax_id: int = 0
+    free: bool = False
+    xml: str = field(default="", repr=False)
 
     def to_xml(self) -> str:
         """The model as MJCF text, to open in MuJoCo's own viewer."""
@@ -397,11 +427,10 @@ def build_robot(
     -------
     RobotModel
     """
-    if configuration not in CONFIGURATIONS:
-        raise ValueError(f"configuration {configuration!r} should be one of {CONFIGURATIONS}")
+    joints = robot_joints(parameters, configuration)
     p = parameters
-    actuators = {name: load_actuator(getattr(p.actuators, name)) for name in JOINT_NAMES}
-    linkages = leg_linkages(p, actuators)
+    actuators, linkages, legs, names = (joints.actuators, joints.linkages, joints.legs,
+                                        joints.joint_names)
     spec = mujoco.MjSpec()
     spec.modelname = f"{p.meta.name}-{configuration}-{environment}"
     spec.option.timestep = p.simulation.control_step / p.simulation.physics_steps
@@ -432,24 +461,16 @@ def build_robot(
     _inertia_override(thorax, p.thorax, geom.mass)
     thorax.add_camera(name="side", pos=[0.6, -2.2, 0.3], xyaxes=[1, 0, 0, 0, 0, 1],
                       mode=mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM)
-    legs = LEG_NAMES if configuration != "testbed" else ("front_left", "front_right")
     for leg in legs:
         _add_leg(spec, thorax, leg, p, linkages, actuators)
     if configuration == "testbed":
         _add_testbed_wheels(spec, thorax, p)
     model = spec.compile()
-    names = tuple(f"{leg}_{joint}" for leg in legs for joint in JOINT_NAMES)
     joint_ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, n) for n in names]
     return RobotModel(
+        **{f.name: getattr(joints, f.name) for f in fields(RobotJoints)},
         model=model,
-        parameters=p,
-        actuators=actuators,
-        configuration=configuration,
         environment=environment,
-        legs=legs,
-        joint_names=names,
-        joint_types=tuple(n.rsplit("_", 1)[1] for n in names),
-        linkages=linkages,
         qpos_address=np.array([model.jnt_qposadr[i] for i in joint_ids]),
         dof_address=np.array([model.jnt_dofadr[i] for i in joint_ids]),
         tendon_id=np.array(

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from pneumaquad.core.bank import ActuatorArrays
-from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update
+from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update, scale_gains
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.kernel import advance_actuators
 from pneumaquad.core.physics.friction import stribeck_curve
@@ -242,16 +242,7 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
         if joint.mode == MODE_CLOSED_LOOP:
             target = piston_from_angle(cylinders.linkage[i], controllers.reference_angles[i])
             reference_positions[i] = min(max(target, 0.0), stroke)
-            gains = controllers.gains[i]
-            scale = controllers.gain_scale[i]
-            scaled.proportional_gain = gains.proportional_gain * scale
-            scaled.integral_gain = gains.integral_gain * scale
-            scaled.derivative_gain = gains.derivative_gain * scale
-            scaled.derivative_filter_time_constant = gains.derivative_filter_time_constant
-            scaled.integral_limit = gains.integral_limit
-            scaled.offset_voltage = gains.offset_voltage
-            scaled.min_voltage = gains.min_voltage
-            scaled.max_voltage = gains.max_voltage
+            scale_gains(controllers.gains[i], controllers.gain_scale[i], scaled)
             tracking = joint.force_tracking_gain
             if tracking > 0.0:
                 scaled.proportional_gain *= joint.force_stiffness

@@ -23,7 +23,7 @@ import numpy as np
 from pneumaquad.core.bank import ActuatorArrays, ActuatorBank
 from pneumaquad.params import ActuatorParameters
 
-from .builder import RobotModel
+from .builder import RobotJoints
 from .coupling import (
     COUPLING_DTYPE,
     JOINT_CONTROL_DTYPE,
@@ -72,7 +72,7 @@ class CylinderJoints:
 
     Parameters
     ----------
-    robot : RobotModel
+    robot : RobotJoints
         Only its parameters, joint types, actuator parameters and linkages are read
         (no MuJoCo data is made).
     supply : {"ideal", "tank"}, optional
@@ -99,7 +99,7 @@ class CylinderJoints:
         and of the bank's).
     """
 
-    def __init__(self, robot: RobotModel, supply: str | None = None) -> None:
+    def __init__(self, robot: RobotJoints, supply: str | None = None) -> None:
         p = robot.parameters
         n = robot.joint_count
         actuators = [robot.actuators[t] for t in robot.joint_types]

@@ -94,6 +94,20 @@ def controller_gains(controller, valve) -> np.void:
 
 
 @compiled
+def scale_gains(gains, scale: float, scaled) -> None:
+    """Copy the PID_GAINS_DTYPE record ``gains`` into ``scaled`` with Kp, Ki and Kd
+    multiplied by ``scale`` [-] (gain scheduling); filter, limits and voltages as they are."""
+    scaled.proportional_gain = gains.proportional_gain * scale
+    scaled.integral_gain = gains.integral_gain * scale
+    scaled.derivative_gain = gains.derivative_gain * scale
+    scaled.derivative_filter_time_constant = gains.derivative_filter_time_constant
+    scaled.integral_limit = gains.integral_limit
+    scaled.offset_voltage = gains.offset_voltage
+    scaled.min_voltage = gains.min_voltage
+    scaled.max_voltage = gains.max_voltage
+
+
+@compiled
 def pid_update(gains, state, reference: float, measurement: float, sample_time: float) -> float:
     """One controller sample.
 
