@@ -163,3 +163,30 @@ def test_only_the_run_folder_module_names_the_files() -> None:
                 offenders.append(f"{path.relative_to(PACKAGE)}:{node.lineno} json.{node.attr}")
     allowed = {"demo/reports.py", "reporting/cost_report.py"}  # report files, not run folders
     assert [o for o in offenders if o.split(":")[0] not in allowed] == []
+
+
+def test_the_parquet_recording_describes_itself(tmp_path: Path) -> None:
+    """Units per column, the resolved parameters, software and format versions travel in
+    the Parquet file's metadata and read back equal to what was written."""
+    import pneumaquad
+    from pneumaquad.io.run_folder import FORMAT_VERSION, RunFolderWriter, read_run_folder
+    from pneumaquad.io.tables import read_table_metadata
+    from pneumaquad.params import load_rig
+
+    writer = RunFolderWriter(tmp_path / "run")
+    writer.write_parameters(load_rig("thesis-rig"))
+    columns = ("time [s]", "cap pressure [Pa]", "piston velocity [m/s]", "control mode [-]")
+    with writer.recorder(columns) as recorder:
+        recorder.append(np.array([[0.0, 1e5, 0.01, 1.0], [0.001, 1.1e5, 0.02, 1.0]]))
+    writer.write_summary({"description": "metadata"})
+    run = read_run_folder(tmp_path / "run")
+    assert run.recording_file.suffix == ".parquet"
+    assert run.units == {"time [s]": "s", "cap pressure [Pa]": "Pa",
+                         "piston velocity [m/s]": "m/s", "control mode [-]": "-"}
+    metadata = read_table_metadata(run.recording_file)
+    assert metadata.quantities["cap pressure [Pa]"] == "cap pressure"
+    assert metadata.file["pneumaquad version"] == pneumaquad.__version__
+    assert metadata.file["run folder format"] == str(FORMAT_VERSION)
+    assert metadata.file["parameters.toml"] == run.parameters
+    csv_units = read_table_metadata(tmp_path / "run" / "recording.csv").units
+    assert csv_units == run.units

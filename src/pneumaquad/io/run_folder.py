@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from pneumaquad.io.tables import StreamedTable, read_table
+from pneumaquad.io.tables import StreamedTable, read_table, read_table_metadata
 
 if TYPE_CHECKING:
     from pneumaquad.params import ActuatorParameters, RigSetup, RobotParameters
@@ -121,7 +121,20 @@ class RunRecorder(StreamedTable):
 
     def __init__(self, folder: Path, columns: Sequence[str]) -> None:
         self.folder = Path(folder)
-        super().__init__(self.folder / CSV_NAME, self.folder / PARQUET_NAME, columns)
+        super().__init__(self.folder / CSV_NAME, self.folder / PARQUET_NAME, columns,
+                         metadata=self._provenance)
+
+    def _provenance(self) -> dict[str, str]:
+        """The Parquet file's metadata: ``pneumaquad version``, ``run folder format`` and,
+        when the folder has them, the resolved parameters (``parameters.toml``)."""
+        from pneumaquad import __version__
+
+        metadata = {"pneumaquad version": __version__,
+                    "run folder format": str(FORMAT_VERSION)}
+        parameters = self.folder / PARAMETERS_NAME
+        if parameters.is_file():
+            metadata["parameters.toml"] = parameters.read_text(encoding="utf-8")
+        return metadata
 
 
 def jsonable(value: Any, where: str = "value") -> Any:
@@ -364,6 +377,12 @@ class RunFolder:
     summary: dict[str, Any]
     timing: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
+
+    @property
+    def units(self) -> dict[str, str]:
+        """Column name → SI unit, from the Parquet file's column metadata (or the CSV
+        header's ``quantity [unit]`` names)."""
+        return read_table_metadata(self.recording_file).units
 
     @property
     def parameters_file(self) -> Path:

@@ -5,13 +5,20 @@ files): :class:`StreamedTable` appends float64 rows to a CSV file, flushing each
 that an interrupted or killed run still leaves a readable file, and writes the whole
 table as Parquet on close; :func:`read_table` reads either file back as one float64 array
 per column.
+
+The Parquet file describes itself: each column's field metadata holds its ``quantity``
+and ``unit`` (split from the ``quantity [unit]`` name), and the file's metadata the
+key/value pairs the writer passes (the run folder puts the software version, its format
+version and the resolved parameters there); :func:`read_table_metadata` reads them back.
 """
 
 from __future__ import annotations
 
 import csv
 import io
-from collections.abc import Sequence
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Self
@@ -20,7 +27,18 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-__all__ = ["StreamedTable", "read_table"]
+__all__ = ["StreamedTable", "TableMetadata", "quantity_and_unit", "read_table",
+           "read_table_metadata"]
+
+_NAMED = re.compile(r"^(?P<quantity>.*\S)\s*\[(?P<unit>[^\[\]]*)\]$")
+
+
+def quantity_and_unit(column: str) -> tuple[str, str]:
+    """``("cap pressure", "Pa")`` from ``"cap pressure [Pa]"``; unit ``""`` without one."""
+    match = _NAMED.match(column.strip())
+    if match is None:
+        return column.strip(), ""
+    return match.group("quantity"), match.group("unit").strip()
 
 
 class StreamedTable:
@@ -35,9 +53,15 @@ class StreamedTable:
         Files to write (their folder is created).
     columns
         Column names, ``quantity [unit]`` in SI units.
+    metadata
+        File-level key/value text for the Parquet file, or a callable that returns it
+        when the file is written (on close).
     """
 
-    def __init__(self, csv_path: Path, parquet_path: Path, columns: Sequence[str]) -> None:
+    def __init__(self, csv_path: Path, parquet_path: Path, columns: Sequence[str],
+                 metadata: Mapping[str, str] | Callable[[], Mapping[str, str]] | None = None,
+                 ) -> None:
+        self.metadata = metadata
         self.csv_path = Path(csv_path)
         self.parquet_path = Path(parquet_path)
         self.csv_path.parent.mkdir(parents=True, exist_ok=True)
@@ -105,9 +129,15 @@ class StreamedTable:
             self._file.close()
             self._file = None
         arrays = self.to_arrays()
-        table = pa.table(
-            {name: pa.array(values, type=pa.float64()) for name, values in arrays.items()}
-        )
+        fields = []
+        for name in arrays:
+            quantity, unit = quantity_and_unit(name)
+            fields.append(pa.field(name, pa.float64(),
+                                   metadata={"quantity": quantity, "unit": unit}))
+        extra = self.metadata() if callable(self.metadata) else (self.metadata or {})
+        schema = pa.schema(fields, metadata={str(k): str(v) for k, v in extra.items()})
+        table = pa.table([pa.array(values, type=pa.float64()) for values in arrays.values()],
+                         schema=schema)
         pq.write_table(table, self.parquet_path)
 
     def __enter__(self) -> Self:
@@ -166,3 +196,44 @@ def read_table(path: Path) -> dict[str, np.ndarray]:
     else:
         data = np.empty((0, len(header)))
     return {name: data[:, i].copy() for i, name in enumerate(header)}
+
+
+@dataclass(frozen=True)
+class TableMetadata:
+    """What a recording file says about itself.
+
+    Attributes
+    ----------
+    units : dict of str to str
+        Column name → SI unit (``"-"`` for a dimensionless column, ``""`` if none given).
+    quantities : dict of str to str
+        Column name → quantity (the name without its unit).
+    file : dict of str to str
+        The file-level key/values of a Parquet file (empty for a CSV file).
+    """
+
+    units: dict[str, str]
+    quantities: dict[str, str]
+    file: dict[str, str]
+
+
+def read_table_metadata(path: Path) -> TableMetadata:
+    """The column units and quantities and the file metadata of a ``.parquet`` file; for
+    a ``.csv`` file the units and quantities from its header names."""
+    path = Path(path)
+    if path.suffix == ".parquet":
+        schema = pq.read_schema(path)
+        units, quantities = {}, {}
+        for item in schema:
+            meta = {k.decode(): v.decode() for k, v in (item.metadata or {}).items()}
+            quantity, unit = quantity_and_unit(item.name)
+            units[item.name] = meta.get("unit", unit)
+            quantities[item.name] = meta.get("quantity", quantity)
+        file = {k.decode(): v.decode() for k, v in (schema.metadata or {}).items()
+                if not k.startswith(b"pandas")}
+        return TableMetadata(units, quantities, file)
+    with path.open(newline="") as handle:
+        header = next(csv.reader(handle), None) or []
+    split = {name: quantity_and_unit(name) for name in header}
+    return TableMetadata({n: u for n, (_, u) in split.items()},
+                         {n: q for n, (q, _) in split.items()}, {})
