@@ -20,9 +20,8 @@ import numpy as np
 from numba import njit
 
 from _bench import machine_line, stats, table, write_json
-from pneumaquad.core.physics.friction import friction_damping
 from pneumaquad.core.physics.valve import input_pressure, polynomial_area, simple_valve_area
-from pneumaquad.core.pneumatics import friction_of
+from pneumaquad.core.pneumatics import friction_of, friction_slope_of
 from pneumaquad.params import RigSetup, load_rig
 from pneumaquad.reporting.cost_report import cost_table_markdown
 from pneumaquad.reporting.cost_table import measure_cost_table
@@ -66,20 +65,7 @@ def friction_loop(p, velocities):
     """Friction force and its slope, as rig_mechanics_substep evaluates them per substep."""
     total = 0.0
     for v in velocities:
-        total += friction_of(p, v, 0.0) + friction_damping(
-            p.friction_model,
-            v,
-            p.static_force,
-            p.coulomb_force,
-            p.viscous_coefficient,
-            p.stribeck_velocity,
-            p.stribeck_exponent,
-            p.tanh_coefficient,
-            p.damping_coefficient,
-            p.bristle_stiffness,
-            p.bristle_damping,
-            0.0,
-        )
+        total += friction_of(p, v, 0.0) + friction_slope_of(p, v, 0.0)
     return total
 
 

@@ -19,7 +19,7 @@ functions of :mod:`pneumaquad.core.pneumatics`.
 """
 
 from pneumaquad.core.jit import compiled
-from pneumaquad.core.physics.force import end_stop_force, piston_force
+from pneumaquad.core.physics.force import end_stop_force
 from pneumaquad.core.physics.friction import (
     FRICTION_COULOMB,
     FRICTION_COULOMB_VISCOUS,
@@ -36,6 +36,7 @@ from pneumaquad.core.pneumatics import (
     friction_of,
     friction_slope_of,
     heun_pneumatics,
+    pneumatic_force_of,
     pneumatic_rates,
     substep_connections,
     valve_connections,
@@ -131,17 +132,7 @@ def rig_mechanics_substep(p, s, time_step, out):
     x = s.position
     v = s.velocity
     mass = p.moving_mass
-    force = (
-        piston_force(
-            s.cap_pressure,
-            s.rod_pressure,
-            p.atmospheric_pressure,
-            p.cap_area,
-            p.rod_area,
-            p.rod_cross_section,
-        )
-        + p.gravity_force
-    )
+    force = pneumatic_force_of(p, s) + p.gravity_force
     stop = end_stop_force(x, v, p.stroke, p.end_stop_stiffness, p.end_stop_damping)
     model = p.friction_model
     dry_model = model in (FRICTION_COULOMB, FRICTION_COULOMB_VISCOUS)
@@ -295,17 +286,7 @@ def rig_rates(params, state, command, supply_pressure, rates):
             v, p.static_force, p.coulomb_force, p.stribeck_velocity, p.stribeck_exponent
         )
         r.bristle_deflection = v - p.bristle_stiffness * abs(v) * y.bristle_deflection / g
-    force = (
-        piston_force(
-            y.cap_pressure,
-            y.rod_pressure,
-            p.atmospheric_pressure,
-            p.cap_area,
-            p.rod_area,
-            p.rod_cross_section,
-        )
-        + p.gravity_force
-    )
+    force = pneumatic_force_of(p, y) + p.gravity_force
     stop = end_stop_force(x, v, p.stroke, p.end_stop_stiffness, p.end_stop_damping)
     friction = friction_of(p, v, y.bristle_deflection)
     r.position = v

@@ -347,6 +347,20 @@ def heun_pneumatics(p, constants, s, position, velocity, time_step, connections,
 
 
 @compiled
+def pneumatic_force_of(p, s):
+    """Pneumatic force of actuator ``p`` in chamber state ``s`` [N] (eq 4.1.11, positive
+    extends the piston; no friction)."""
+    return piston_force(
+        s.cap_pressure,
+        s.rod_pressure,
+        p.atmospheric_pressure,
+        p.cap_area,
+        p.rod_area,
+        p.rod_cross_section,
+    )
+
+
+@compiled
 def friction_of(p, velocity, bristle):
     """Friction force of actuator ``p`` at a velocity and bristle deflection [N]."""
     return friction_force(
@@ -409,14 +423,7 @@ def finish_outputs(p, s, position, control_step, out):
 def state_outputs(p, s, position, out):
     """Pneumatic force [N] (eq 4.1.11) and chamber temperatures [K] of the state ``s`` with
     the piston at ``position`` [m], into ``out``."""
-    out.pneumatic_force = piston_force(
-        s.cap_pressure,
-        s.rod_pressure,
-        p.atmospheric_pressure,
-        p.cap_area,
-        p.rod_area,
-        p.rod_cross_section,
-    )
+    out.pneumatic_force = pneumatic_force_of(p, s)
     out.cap_temperature = chamber_temperature(
         s.cap_pressure,
         chamber_volume_cap(position, p.cap_area, p.cap_dead_length),
