@@ -167,7 +167,12 @@ def serve_dynamics(
                      "foreign [count]", "timeouts [count]", "refused hellos [count]",
                      "clamped commands [count]", "divergences [count]", "achieved rate [Hz]",
                      "jitter p99 [s]", "overruns [count]"))
-    if request.requested:
+    _end_of_server_run(summary, request.requested)
+
+
+def _end_of_server_run(summary: dict, interrupted: bool) -> None:
+    """Exit 130 after Ctrl-C, 1 after a run the server ended on a diverged state."""
+    if interrupted:
         console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
         raise typer.Exit(130)
     if "error" in summary:
@@ -198,12 +203,7 @@ def _serve_thesis(params: str, overrides: list[str] | None, configuration: str, 
     with deferred_interrupt() as request:
         summary = server.run(request)
     _print(summary, tuple(key for key in summary if key.endswith("]")))
-    if request.requested:
-        console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
-        raise typer.Exit(130)
-    if "error" in summary:
-        _fail(f"{summary['error']} (the last good state was held and the run ended; the "
-              "files hold the part that ran)", status=1)
+    _end_of_server_run(summary, request.requested)
 
 
 @serve_app.command("actuators")
