@@ -321,3 +321,15 @@ def test_lab_units_convert_as_parameter_files_do(unit):
     atmosphere = 98000.0
     column = to_si(np.array([2.5]), unit, kind, atmosphere)[0]
     assert column == convert_quantity(f"2.5 {unit}", kind, atmospheric_pressure=atmosphere)
+
+
+@pytest.mark.parametrize(("written", "quantity", "spelled"), [
+    ("PSIG", "cap pressure", "psig"), ("KPA", "cap pressure", "kPa"), ("MS", "time", "ms"),
+    ("MM", "position", "mm"), ("mPa", "cap pressure", "mPa"),
+])
+def test_capitalised_lab_units_take_their_usual_spelling(written, quantity, spelled):
+    """A name that is not a unit of the quantity's kind as written (pint reads "MS" as
+    megasiemens) is matched to the usual unit regardless of case; a real unit of the
+    right kind as written ("mPa") is kept."""
+    mapping = mapping_from_dict({"columns": {"time": ("t", "s"), quantity: ("x", written)}})
+    assert mapping.columns[quantity].unit == spelled

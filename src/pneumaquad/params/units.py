@@ -272,8 +272,7 @@ def unit_scale(unit: str, kind: str | Kind) -> tuple[float, bool]:
 
     The same registry and gauge/absolute rule as the parameter files, for callers that
     convert whole columns (lab recordings): ``value_SI = value·factor (+ atmosphere if
-    gauge)``. A name the registry does not know is tried once more in lower case, as
-    lab files often write units in capitals (``"PSIG"``, ``"MM"``).
+    gauge)``.
 
     Raises
     ------
@@ -281,11 +280,4 @@ def unit_scale(unit: str, kind: str | Kind) -> tuple[float, bool]:
         Unknown unit, a unit of another kind, or ``psi``/``bar`` without ``g``/``a``.
     """
     name = unit.strip()
-    try:
-        factor = convert_quantity(f"1 {name}", kind, atmospheric_pressure=0.0)
-    except QuantityError as error:
-        if name.lower() == name or "could not be parsed" not in str(error):
-            raise
-        name = name.lower()
-        factor = convert_quantity(f"1 {name}", kind, atmospheric_pressure=0.0)
-    return factor, name in _GAUGE_UNITS
+    return convert_quantity(f"1 {name}", kind, atmospheric_pressure=0.0), name in _GAUGE_UNITS

@@ -247,16 +247,35 @@ def _column_spec(quantity: str, entry: Any, problems: list[str]) -> ColumnSpec |
 
 
 def _check_unit(quantity: str, kind: str, unit: Any, problems: list[str]) -> str:
+    """The unit name to convert ``quantity`` with: as written when the parameter files'
+    parser takes it for a ``kind``, else its usual spelling if it is one lab files write
+    in capitals (``"PSIG"``, ``"MS"``); problems are appended, naming the quantity."""
     if not isinstance(unit, str) or not unit.strip():
         problems.append(f"{quantity}: 'unit' must be a unit name such as "
                         f"{_EXAMPLE_UNITS[kind]!r}; got {unit!r}")
         return ""
+    name = unit.strip()
     try:
-        unit_scale(unit, kind)
+        unit_scale(name, kind)
+        return name
     except QuantityError as error:
-        problems.append(f"{quantity}: unit {unit!r} {error}")
+        spelled = _CASE_FREE_UNITS.get(name.lower())
+        if spelled is None or spelled == name:
+            problems.append(f"{quantity}: unit {unit!r} {error}")
+            return ""
+    try:
+        unit_scale(spelled, kind)
+    except QuantityError as error:
+        problems.append(f"{quantity}: unit {unit!r} ({spelled!r}) {error}")
         return ""
-    return unit.strip()
+    return spelled
+
+
+#: Units lab files often write in capitals, matched without regard to case when the name
+#: as written is not a unit of the quantity's kind ("MS" is megasiemens to pint).
+_CASE_FREE_UNITS = {name.lower(): name for name in (
+    "s", "ms", "m", "cm", "mm", "in", "Pa", "kPa", "MPa", "bara", "psia", "Pag", "kPag",
+    "MPag", "barg", "psig", "psi", "bar", "V", "mV")}
 
 
 #: A unit of each kind, for messages.
