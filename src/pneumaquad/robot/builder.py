@@ -118,13 +118,13 @@ class RobotModel(RobotJoints):
         Per simulated joint (feet: per leg).
     """
 
-    model: mujoco.MjModel = field(default=None, repr=False)
-    environment: str = "flat"
-    qpos_address: np.ndarray = field(default=None, repr=False)
-    dof_address: np.ndarray = field(default=None, repr=False)
-    tendon_id: np.ndarray = field(default=None, repr=False)
-    actuator_id: np.ndarray = field(default=None, repr=False)
-    foot_site_id: np.ndarray = field(default=None, repr=False)
+    model: mujoco.MjModel
+    environment: str
+    qpos_address: np.ndarray = field(repr=False)
+    dof_address: np.ndarray = field(repr=False)
+    tendon_id: np.ndarray = field(repr=False)
+    actuator_id: np.ndarray = field(repr=False)
+    foot_site_id: np.ndarray = field(repr=False)
     thorax_id: int = 0
     free: bool = False
     xml: str = field(default="", repr=False)
