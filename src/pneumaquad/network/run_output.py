@@ -20,6 +20,7 @@ import numpy as np
 from pneumaquad.io.run_folder import RunFolderWriter
 from pneumaquad.network.packet_log import PacketLog
 from pneumaquad.network.timing import timing_summary
+from pneumaquad.robot.builder import RobotJoints, RobotModel
 
 __all__ = ["NetworkRecording", "write_network_files", "write_run_description"]
 
@@ -98,7 +99,8 @@ def write_network_files(folder: Path, log: PacketLog, control_step: float,
     return summary
 
 
-def write_run_description(folder: Path, robot: Any, summary: Mapping[str, Any]) -> None:
+def write_run_description(folder: Path, robot: RobotJoints,
+                          summary: Mapping[str, Any]) -> None:
     """Write ``parameters.toml``, ``model.xml`` and ``summary.json`` of a networked run, so
     that ``pneumaquad report`` and ``pneumaquad video`` read it like any robot run.
 
@@ -106,6 +108,6 @@ def write_run_description(folder: Path, robot: Any, summary: Mapping[str, Any]) 
     the joints only (:func:`pneumaquad.robot.builder.robot_joints`) and writes none."""
     writer = RunFolderWriter(folder)
     writer.write_parameters(robot.parameters)
-    if hasattr(robot, "to_xml"):
+    if isinstance(robot, RobotModel):
         writer.write_model(robot.to_xml())
     writer.write_summary(summary)
