@@ -34,7 +34,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .stability import stability_margin, support_polygon
+from .stability import stability_margin, support_margins, support_polygon
 
 __all__ = [
     "LATERAL_SEQUENCE",
@@ -287,12 +287,10 @@ def plan_margins(gait: CrawlGait, times: ArrayLike | None = None,
         first = gait.period if gait.start_up else 0.0
         times = np.linspace(first, first + gait.period, samples, endpoint=False)
     times = np.asarray(times, dtype=float)
-    feet = foot_targets(gait, times)[..., :2]
     stance = stance_flags(gait, times)
-    margins = np.array([
-        stability_margin(gait.com_offset, support_polygon(feet[k][stance[k]]))
-        for k in range(times.size)
-    ])
+    if not stance.any(axis=-1).all():
+        raise ValueError("no support: an instant of the plan has no foot in stance")
+    margins = support_margins(foot_targets(gait, times), stance, gait.com_offset)
     return times, margins
 
 

@@ -26,7 +26,7 @@ from pneumaquad.gait.crawl import (
     stance_flags,
     sway_for_margin,
 )
-from pneumaquad.gait.stability import centre_of_mass, stability_margin, support_polygon
+from pneumaquad.gait.stability import centre_of_mass, support_margins
 from pneumaquad.robot.builder import RobotModel
 from pneumaquad.robot.frames import euler_zyx_matrix, rotation_to_quaternion
 from pneumaquad.robot.legs import leg_dh_table, solve_leg, thorax_frame_points
@@ -51,10 +51,12 @@ def standing_feet(robot: RobotModel, angles: Array = STANDING_ANGLES) -> Array:
                      for leg in LEGS])
 
 
-def _pose_data(robot: RobotModel, angles: Array) -> mujoco.MjData:
-    """MuJoCo data with the thorax upright at the origin and the 12 joints at ``angles``."""
+def _pose_data(robot: RobotModel, angles: Array,
+               data: mujoco.MjData | None = None) -> mujoco.MjData:
+    """MuJoCo data with the thorax upright at the origin and the 12 joints at ``angles``
+    (``data`` filled in, or a new one)."""
     model = robot.model
-    data = mujoco.MjData(model)
+    data = mujoco.MjData(model) if data is None else data
     data.qpos[:] = model.qpos0
     if robot.free:
         address = model.jnt_qposadr[0]
@@ -65,9 +67,11 @@ def _pose_data(robot: RobotModel, angles: Array) -> mujoco.MjData:
     return data
 
 
-def _body_com(robot: RobotModel, angles: Array) -> Array:
-    """Centre-of-mass projection (2,) [m] in the body frame for joint ``angles`` (12,)."""
-    data = _pose_data(robot, angles)
+def _body_com(robot: RobotModel, angles: Array,
+              data: mujoco.MjData | None = None) -> Array:
+    """Centre-of-mass projection (2,) [m] in the body frame for joint ``angles`` (12,)
+    (``data``: MuJoCo data to pose, or a new one)."""
+    data = _pose_data(robot, angles, data)
     origin = data.xpos[robot.thorax_id][:2]
     return centre_of_mass(robot.model, data) - origin
 
@@ -153,11 +157,9 @@ def solve_cycle(robot: RobotModel, gait: CrawlGait, samples: int = 200,
                         limit_hits[leg][f"{joint} upper"] += 1
     stance = stance_flags(gait, times)
     body_feet = feet @ to_thorax  # thorax → body frame
-    margins = np.array([
-        stability_margin(_body_com(robot, angles[s]),
-                         support_polygon(body_feet[s, stance[s], :2]))
-        for s in range(samples)
-    ])
+    pose = mujoco.MjData(robot.model)  # one for all samples: each sets the whole qpos
+    coms = np.array([_body_com(robot, angles[s], pose) for s in range(samples)])
+    margins = support_margins(body_feet, stance, coms)
     return CycleSolution(phases, targets, angles, feet, reachable, limit_hits, margins)
 
 

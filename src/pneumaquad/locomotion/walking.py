@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from pneumaquad.gait.settings import CrawlSettings
-from pneumaquad.gait.stability import STANCE_FORCE, support_and_margin
+from pneumaquad.gait.stability import STANCE_FORCE, support_margins
 from pneumaquad.locomotion.walk import WalkPlan, plan_walk, robot_gait
 from pneumaquad.robot.builder import RobotModel
 from pneumaquad.robot.experiment import Phase
@@ -142,8 +142,7 @@ def gait_support_margins(recording: dict[str, np.ndarray], legs: tuple[str, ...]
     feet = np.stack([np.column_stack([recording[f"{leg} foot x [m]"],
                                       recording[f"{leg} foot y [m]"]]) for leg in legs], axis=1)
     com = np.column_stack([recording["centre of mass x [m]"], recording["centre of mass y [m]"]])
-    return np.array([support_and_margin(feet[i], stance[i], com[i])[1]
-                     for i in range(len(com))])
+    return support_margins(feet, stance, com)
 
 
 def _walk_window(recording: dict[str, np.ndarray], summary: dict[str, Any]
