@@ -4,84 +4,66 @@ the fit-result type (`FitResult`) every fit of the package returns.
 
 Pure functions over numpy arrays in SI units; recordings are dicts keyed
 ``"quantity [unit]"`` like those of the rig simulator.
+
+The names below are loaded from their modules on first use (PEP 562), so importing
+one module of the package does not import the others (and their SciPy or
+Matplotlib).
 """
 
-from .compare import (
-    AlignedRecordings,
-    SignalComparison,
-    align_recordings,
-    compare_recordings,
-    comparison_rows,
-    comparison_to_markdown,
-)
-from .filters import (
-    amplitude_spectrum,
-    apply_zero_phase,
-    design_lowpass,
-    lowpass_filter,
-    sample_rate_of,
-    velocity_from_position,
-)
-from .fits import (
-    FIRST_ORDER,
-    FIRST_PLUS_SECOND_ORDER,
-    SECOND_ORDER,
-    FitError,
-    FitResult,
-    evaluate_step_fit,
-    fit_first_order,
-    fit_first_plus_second_order,
-    fit_second_order,
-    fit_step,
-)
-from .metrics import (
-    lag,
-    max_abs_error,
-    overshoot_percent,
-    peak_time,
-    rise_time,
-    rmse,
-    rmse_percent_of_range,
-    settling_time,
-    steady_state_error,
-    step_metrics,
-)
-from .segmentation import StepSegment, find_steps, metrics_per_step
+from importlib import import_module
+from typing import Any
 
-__all__ = [
-    "FIRST_ORDER",
-    "FIRST_PLUS_SECOND_ORDER",
-    "SECOND_ORDER",
-    "AlignedRecordings",
-    "FitError",
-    "FitResult",
-    "SignalComparison",
-    "StepSegment",
-    "align_recordings",
-    "amplitude_spectrum",
-    "apply_zero_phase",
-    "compare_recordings",
-    "comparison_rows",
-    "comparison_to_markdown",
-    "design_lowpass",
-    "evaluate_step_fit",
-    "find_steps",
-    "fit_first_order",
-    "fit_first_plus_second_order",
-    "fit_second_order",
-    "fit_step",
-    "lag",
-    "lowpass_filter",
-    "max_abs_error",
-    "metrics_per_step",
-    "overshoot_percent",
-    "peak_time",
-    "rise_time",
-    "rmse",
-    "rmse_percent_of_range",
-    "sample_rate_of",
-    "settling_time",
-    "steady_state_error",
-    "step_metrics",
-    "velocity_from_position",
-]
+#: public name -> module of the package that defines it
+_PUBLIC = {
+    "align_recordings": "compare",
+    "AlignedRecordings": "compare",
+    "amplitude_spectrum": "filters",
+    "apply_zero_phase": "filters",
+    "compare_recordings": "compare",
+    "comparison_rows": "compare",
+    "comparison_to_markdown": "compare",
+    "design_lowpass": "filters",
+    "evaluate_step_fit": "fits",
+    "find_steps": "segmentation",
+    "FIRST_ORDER": "fits",
+    "FIRST_PLUS_SECOND_ORDER": "fits",
+    "fit_first_order": "fits",
+    "fit_first_plus_second_order": "fits",
+    "fit_second_order": "fits",
+    "fit_step": "fits",
+    "FitError": "fits",
+    "FitResult": "fits",
+    "lag": "metrics",
+    "lowpass_filter": "filters",
+    "max_abs_error": "metrics",
+    "metrics_per_step": "segmentation",
+    "overshoot_percent": "metrics",
+    "peak_time": "metrics",
+    "rise_time": "metrics",
+    "rmse": "metrics",
+    "rmse_percent_of_range": "metrics",
+    "sample_rate_of": "filters",
+    "SECOND_ORDER": "fits",
+    "settling_time": "metrics",
+    "SignalComparison": "compare",
+    "steady_state_error": "metrics",
+    "step_metrics": "metrics",
+    "StepSegment": "segmentation",
+    "velocity_from_position": "filters",
+}
+
+__all__ = sorted(_PUBLIC)
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name from its module on first use."""
+    module_name = _PUBLIC.get(name)
+    if module_name is None:
+        raise AttributeError(f"module 'pneumaquad.analysis' has no attribute {name!r}")
+    value = getattr(import_module(f"{__name__}.{module_name}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))

@@ -21,7 +21,6 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import signal as sp_signal
 
 __all__ = [
     "DEFAULT_FILTER_ORDER",
@@ -88,6 +87,8 @@ def design_lowpass(
         )
     if isinstance(order, bool) or not isinstance(order, int | np.integer) or order < 1:
         raise ValueError(f"filter order {order!r} must be an integer of at least 1")
+    from scipy import signal as sp_signal  # slow to import: loaded on first use
+
     return sp_signal.cheby2(
         int(order),
         float(stopband_attenuation),
@@ -134,6 +135,8 @@ def apply_zero_phase(values: ArrayLike, sections: np.ndarray, axis: int = 0) -> 
             f"signal of {data.shape[axis]} samples is too short for zero-phase filtering "
             f"with {len(sections)} second-order sections; it needs more than {padding}"
         )
+    from scipy import signal as sp_signal
+
     return sp_signal.sosfiltfilt(sections, data, axis=axis)
 
 

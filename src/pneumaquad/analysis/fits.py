@@ -33,7 +33,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import least_squares
 
 __all__ = [
     "FIRST_ORDER",
@@ -530,6 +529,8 @@ def _fit(
         return np.where(np.isfinite(values), values, 1e30)
 
     try:
+        from scipy.optimize import least_squares  # slow to import: loaded on first use
+
         solution = least_squares(
             residuals, initial, method="lm", x_scale="jac", max_nfev=400 * len(guess)
         )

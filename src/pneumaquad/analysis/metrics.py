@@ -14,7 +14,6 @@ from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import signal as sp_signal
 
 from .filters import sample_rate_of
 
@@ -403,6 +402,8 @@ def _tail(times: np.ndarray, window: float | None) -> np.ndarray:
 
 def _shifted_correlations(x: np.ndarray, y: np.ndarray, shifts: np.ndarray) -> np.ndarray:
     """Pearson correlation of ``x[n]`` with ``y[n + k]`` over their overlap, per shift k."""
+    from scipy import signal as sp_signal  # loaded on first use: it is slow to import
+
     count = x.size
     # Centre both to limit cancellation in the running sums.
     x = x - x.mean()

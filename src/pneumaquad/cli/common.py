@@ -13,6 +13,9 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
+from pneumaquad.cli import COMMAND_STARTED
+from pneumaquad.io.run_folder import RunFolderWriter
+from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.params import ParameterError, Problem, parse_quantity
 from pneumaquad.params.schema import Bounds
 
@@ -24,8 +27,10 @@ __all__ = [
     "WALL_DURATION",
     "OutputOption",
     "ParamsOption",
+    "ProfileOption",
     "SetOption",
     "check_step_count",
+    "command_clock",
     "console",
     "finish_run",
     "option_range",
@@ -57,6 +62,20 @@ SetOption = Annotated[
 OutputOption = Annotated[
     Path | None, typer.Option("--output", "-o", help="Run folder (default runs/<kind>-<time>).")
 ]
+
+ProfileOption = Annotated[
+    bool,
+    typer.Option("--profile", help="Write profile.json to the run folder and print where the "
+                 "wall time went, stage by stage."),
+]
+
+
+def command_clock() -> StageClock:
+    """A stage clock that starts when the command line started loading, with the time
+    until now counted as ``"start-up"`` (imports, argument parsing)."""
+    clock = StageClock(started=COMMAND_STARTED)
+    clock.add("start-up", clock.elapsed())
+    return clock
 
 
 @contextmanager
@@ -146,8 +165,14 @@ def option_range(bounds: Bounds) -> Callable[[float | int | None], float | int |
     return check
 
 
-def finish_run(folder: Path, summary: dict) -> None:
-    """Print where a run went and end with 130 if it was interrupted."""
+def finish_run(folder: Path, summary: dict, clock: StageClock | None = None,
+               profile: bool = False) -> None:
+    """Print where a run went and end with 130 if it was interrupted.
+
+    With the command's ``clock`` the real-time factor of the whole command (from its
+    start, plots included) is printed after the run's own; with ``profile`` the clock's
+    stages are written to ``profile.json`` in ``folder`` and printed.
+    """
     console.print(f"run folder: [bold]{folder}[/bold]")
     shown = (
         "simulated time [s]",
@@ -161,6 +186,26 @@ def finish_run(folder: Path, summary: dict) -> None:
     for key in shown:
         if key in summary:
             console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
+    if clock is not None:
+        simulated = summary.get("simulated time [s]")
+        report = clock.report(simulated)
+        if simulated is not None:
+            console.print(f"  command real-time factor (start-up, run, plots): "
+                          f"{report['real-time factor']:.3g} ({report['total [s]']:.3g} s)",
+                          markup=False, highlight=False)
+        if profile:
+            _print_profile(folder, report)
     if summary.get("interrupted"):
         console.print("[yellow]interrupted: the recording holds the part that ran[/yellow]")
         raise typer.Exit(130)
+
+
+def _print_profile(folder: Path, report: dict) -> None:
+    """Write the clock's report to ``profile.json`` and print it as a table."""
+    path = RunFolderWriter(folder).write_profile(report)
+    console.print(f"profile: [bold]{path}[/bold]")
+    for name, entry in report["stages"].items():
+        console.print(f"  {name:<42} {entry['seconds']:9.4f} s {100 * entry['share']:5.1f} %"
+                      f" ({entry['calls']} calls)", markup=False, highlight=False)
+    console.print(f"  {'untimed':<42} {report['untimed [s]']:9.4f} s", markup=False,
+                  highlight=False)

@@ -19,8 +19,10 @@ from pneumaquad.cli.common import (
     MAX_SIMULATED_TIME,
     OutputOption,
     ParamsOption,
+    ProfileOption,
     SetOption,
     check_step_count,
+    command_clock,
     console,
     finish_run,
     option_range,
@@ -103,8 +105,10 @@ def rig_step(
     output: OutputOption = None,
     step_time: Annotated[str, typer.Option(help="Time of the step.")] = "5 s",
     duration: Annotated[str, typer.Option(help="Total duration.")] = "10 s",
+    profile: ProfileOption = False,
 ) -> None:
     """Open-loop voltage step with the thesis protocol (opposite saturation, then the step)."""
+    clock = command_clock()
     setup = load_rig(params, overrides or [])
     command = valve_voltage(voltage, setup)
     valve = setup.actuator.valve
@@ -127,9 +131,10 @@ def rig_step(
     folder = create_run_folder(output, "rig-step")
     with progress_bar("rig step") as update:
         _, summary = run_rig_experiment(
-            setup, folder, signal, False, f"open-loop step to {command:g} V", at, update
+            setup, folder, signal, False, f"open-loop step to {command:g} V", at, update,
+            clock=clock,
         )
-    finish_run(folder, summary)
+    finish_run(folder, summary, clock, profile)
 
 
 #: Longest spacer sweep, all held voltages together [s] (one hour).
@@ -170,6 +175,7 @@ def rig_spacer(
     overrides: SetOption = None,
     output: OutputOption = None,
     duration: Annotated[str, typer.Option(help="Time at each held voltage.")] = "5 s",
+    profile: ProfileOption = False,
 ) -> None:
     """Fixed piston (spacer, thesis 4.2.1) at held voltages: pressures settle on Fig. 23.
 
@@ -177,6 +183,7 @@ def rig_spacer(
     --spacer RUN_FOLDER` fits the input-pressure curves from it (three voltages at least,
     two of them in each port's transition).
     """
+    clock = command_clock()
     setup = load_rig(params, [*(overrides or []), "rig.spacer=true"])
     valve = setup.actuator.valve
     levels = held_voltages(voltages, (valve.min_voltage, valve.max_voltage))
@@ -203,8 +210,9 @@ def rig_spacer(
             None,
             update,
             extra={"held voltages [V]": levels, "time per voltage [s]": hold},
+            clock=clock,
         )
-    finish_run(folder, summary)
+    finish_run(folder, summary, clock, profile)
 
 
 @rig_app.command("track")
@@ -236,8 +244,10 @@ def rig_track(
     time_column: Annotated[str, typer.Option(help="Time column in --file [s].")] = "time",
     position_column: Annotated[str, typer.Option(help="Position column in --file.")] = "position",
     position_unit: Annotated[str, typer.Option(help="Unit of the position column.")] = "m",
+    profile: ProfileOption = False,
 ) -> None:
     """Closed-loop position tracking with the PID of the parameter file."""
+    clock = command_clock()
     setup = load_rig(params, overrides or [])
     signal = build_reference(
         reference,
@@ -259,9 +269,10 @@ def rig_track(
     folder = create_run_folder(output, f"rig-{reference}")
     with progress_bar(f"rig track {reference}") as update:
         _, summary = run_rig_experiment(
-            setup, folder, signal, True, f"closed-loop {reference} tracking", None, update
+            setup, folder, signal, True, f"closed-loop {reference} tracking", None, update,
+            clock=clock,
         )
-    finish_run(folder, summary)
+    finish_run(folder, summary, clock, profile)
 
 
 def valve_voltage(text: str, setup: RigSetup) -> float:

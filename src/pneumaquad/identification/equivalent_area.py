@@ -24,7 +24,6 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from pneumaquad.analysis import find_steps
 from pneumaquad.analysis.filters import sample_rate_of
@@ -569,6 +568,7 @@ def equivalent_area_for_step(
         start_values = np.log([initial[port] for port in ports])
         lower, upper = [math.log(_MIN_AREA)] * 2, [math.log(_MAX_AREA)] * 2
         names = [f"port{port}_area [m^2]" for port in ports]
+    from scipy.optimize import least_squares  # SciPy loads on first use: it is slow to import
     solution = least_squares(
         residuals,
         start_values,

@@ -20,7 +20,6 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from pneumaquad.analysis.fits import FitResult
 from pneumaquad.params.schema import RigSetup
@@ -204,6 +203,7 @@ def stiction_from_step(
     first = max(0, onset - round(search_before / interval))
     last = min(along.size, onset + round(search_after / interval) + 1)
     window = along[first:last]
+    from scipy.signal import find_peaks  # SciPy loads on first use: it is slow to import
     peaks, _ = find_peaks(window, prominence=min_prominence)
     peaks = peaks[window[peaks] > 0.0]
     peak = first + int(peaks[0]) if peaks.size else onset

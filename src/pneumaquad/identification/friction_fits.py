@@ -14,7 +14,6 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import least_squares
 
 from pneumaquad.analysis.fits import FitResult, covariance_from_jacobian, r_squared
 from pneumaquad.core.jit import compiled
@@ -197,6 +196,7 @@ def fit_stribeck_tanh(
     def residuals(free_values: np.ndarray) -> np.ndarray:
         return stribeck_tanh_curve(v, _to_values(full(free_values))) - f
 
+    from scipy.optimize import least_squares  # SciPy loads on first use: it is slow to import
     solution = least_squares(
         residuals,
         np.clip(start[free], _LOWER[free] + 1e-12, _UPPER[free] - 1e-12),

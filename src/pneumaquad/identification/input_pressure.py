@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.optimize import least_squares
 
 from pneumaquad.analysis.fits import FitResult, covariance_from_jacobian, r_squared
 from pneumaquad.core.valve_fit import input_pressure
@@ -242,6 +241,8 @@ def fit_input_pressure_curve(
     starts = sorted(
         _curve_starts(u), key=lambda start: float(np.sum(residuals(np.array(start)) ** 2))
     )
+    from scipy.optimize import least_squares  # SciPy loads on first use: it is slow to import
+
     solution = min(
         (least_squares(residuals, start, x_scale=[1.0, 1.0]) for start in starts[:3]),
         key=lambda candidate: candidate.cost,

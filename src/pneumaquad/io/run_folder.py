@@ -39,7 +39,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CSV_NAME", "FORMAT_KEY", "FORMAT_VERSION", "MODEL_NAME", "PACKETS_NAME",
-    "PARAMETERS_NAME", "PARQUET_NAME", "SUMMARY_NAME", "TIMING_NAME", "TRAJECTORY_NAME",
+    "PARAMETERS_NAME", "PARQUET_NAME", "PROFILE_NAME", "SUMMARY_NAME", "TIMING_NAME",
+    "TRAJECTORY_NAME",
     "RunFolder", "RunFolderError", "RunFolderVersionError", "RunFolderWriter", "RunRecorder",
     "create_run_folder", "detect_run_kind", "json_text", "jsonable", "read_recording",
     "read_run_folder", "read_summary", "write_json",
@@ -55,6 +56,7 @@ SUMMARY_NAME = "summary.json"
 MODEL_NAME = "model.xml"
 TRAJECTORY_NAME = "trajectory.npz"
 TIMING_NAME = "timing.json"
+PROFILE_NAME = "profile.json"
 PACKETS_NAME = "packets.parquet"
 
 RunKind = Literal["rig", "robot"]
@@ -294,6 +296,11 @@ class RunFolderWriter:
     def write_timing(self, timing: Mapping[str, Any]) -> Path:
         """Write ``timing.json``, the packet timing figures of a networked run."""
         return write_json(self.path / TIMING_NAME, timing)
+
+    def write_profile(self, profile: Mapping[str, Any]) -> Path:
+        """Write ``profile.json``: where a command's wall time went, stage by stage
+        (:meth:`pneumaquad.io.stage_clock.StageClock.report`)."""
+        return write_json(self.path / PROFILE_NAME, profile)
 
 
 def _recording_file(folder: Path) -> Path:

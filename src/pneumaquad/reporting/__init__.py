@@ -5,41 +5,51 @@ the key parameters, the summary metrics, thesis-style time histories, the model 
 the run's parameters (friction law, valve equivalent areas, input pressures) and, with
 measured data, a measured-versus-simulated comparison. ``measure_cost_table`` times the
 components of the rig model like thesis Table 3; ``write_cost_table_report`` writes it.
+
+The names below are loaded from their modules on first use (PEP 562), so importing
+one module of the package does not import the others (and their SciPy or
+Matplotlib).
 """
 
-from .comparison import MeasuredComparison, compare_with_measured
-from .cost_report import write_cost_table_report
-from .cost_table import CostRow, CostTable, measure_cost_table
-from .curves import (
-    AreaCurve,
-    PressureCurve,
-    area_curves,
-    friction_curve,
-    input_pressure_curves,
-)
-from .html import HtmlPage, escape, format_value
-from .report import REPORT_NAME, build_run_report, write_run_report
-from .run_folder import LoadedRun, ReportError, load_run_folder
+from importlib import import_module
+from typing import Any
 
-__all__ = [
-    "REPORT_NAME",
-    "AreaCurve",
-    "CostRow",
-    "CostTable",
-    "HtmlPage",
-    "LoadedRun",
-    "MeasuredComparison",
-    "PressureCurve",
-    "ReportError",
-    "area_curves",
-    "build_run_report",
-    "compare_with_measured",
-    "escape",
-    "format_value",
-    "friction_curve",
-    "input_pressure_curves",
-    "load_run_folder",
-    "measure_cost_table",
-    "write_cost_table_report",
-    "write_run_report",
-]
+#: public name -> module of the package that defines it
+_PUBLIC = {
+    "area_curves": "curves",
+    "AreaCurve": "curves",
+    "build_run_report": "report",
+    "compare_with_measured": "comparison",
+    "CostRow": "cost_table",
+    "CostTable": "cost_table",
+    "escape": "html",
+    "format_value": "html",
+    "friction_curve": "curves",
+    "HtmlPage": "html",
+    "input_pressure_curves": "curves",
+    "load_run_folder": "run_folder",
+    "LoadedRun": "run_folder",
+    "measure_cost_table": "cost_table",
+    "MeasuredComparison": "comparison",
+    "PressureCurve": "curves",
+    "REPORT_NAME": "report",
+    "ReportError": "run_folder",
+    "write_cost_table_report": "cost_report",
+    "write_run_report": "report",
+}
+
+__all__ = sorted(_PUBLIC)
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name from its module on first use."""
+    module_name = _PUBLIC.get(name)
+    if module_name is None:
+        raise AttributeError(f"module 'pneumaquad.reporting' has no attribute {name!r}")
+    value = getattr(import_module(f"{__name__}.{module_name}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))

@@ -1,6 +1,7 @@
 """A rig experiment end to end: run folder, recording, summary and plot."""
 
 import math
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -8,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from pneumaquad.io.run_folder import RunFolderWriter
+from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.reporting.plotting import plot_rig_run
 from pneumaquad.rig.metrics import general_metrics, step_metrics, tracking_metrics
@@ -23,6 +25,7 @@ def run_rig_experiment(
     step_time: float | None = None,
     progress: Callable[[int, int], None] | None = None,
     extra: dict[str, Any] | None = None,
+    clock: StageClock | None = None,
 ) -> tuple[RigResult, dict[str, Any]]:
     """Run one rig experiment and write its run folder (through
     :class:`~pneumaquad.io.run_folder.RunFolderWriter`, docs/run-folder.md).
@@ -44,16 +47,23 @@ def run_rig_experiment(
     RigDivergedError
         After writing the folder, when a recorded value became non-finite.
     """
+    clock = StageClock() if clock is None else clock
     writer = RunFolderWriter(folder)
-    writer.write_parameters(setup)
+    with clock.stage("run folder"):
+        writer.write_parameters(setup)
     failure: RigDivergedError | None = None
-    with writer.recorder(RIG_COLUMNS) as recorder:
-        try:
-            result = simulate_rig(
-                setup, signal, closed_loop, recorder=recorder, progress=progress
-            )
-        except RigDivergedError as error:
-            failure, result = error, error.result
+    began = time.perf_counter()
+    recorder = writer.recorder(RIG_COLUMNS)
+    try:
+        result = simulate_rig(setup, signal, closed_loop, recorder=recorder,
+                              progress=progress, clock=clock)
+    except RigDivergedError as error:
+        failure, result = error, error.result
+    finally:
+        closing = time.perf_counter()
+        recorder.close()
+        clock.add("recording", time.perf_counter() - closing)
+    run_wall = time.perf_counter() - began
     recording = result.recording
     simulated = float(recording["time [s]"][-1]) if recording["time [s]"].size else 0.0
     summary: dict[str, Any] = {
@@ -67,21 +77,24 @@ def run_rig_experiment(
         "closed loop": closed_loop,
         "interrupted": result.interrupted,
         "steps": int(recording["time [s]"].size),
-        "wall time [s]": result.wall_time,
-        "real-time factor": simulated / result.wall_time if result.wall_time > 0 else math.nan,
+        "wall time [s]": run_wall,
+        "real-time factor": simulated / run_wall if run_wall > 0 else math.nan,
     }
     if extra:
         summary.update(extra)
     if failure is not None:
         summary["error"] = str(failure)
     if recording["time [s]"].size:
-        summary.update(general_metrics(recording))
-        if failure is None and closed_loop:
-            summary.update(tracking_metrics(recording, setup.actuator.cylinder.stroke))
-        elif failure is None and step_time is not None:
-            summary.update(step_metrics(recording, step_time))
-        plot_rig_run(recording, folder / "rig.png", title=description)
-    writer.write_summary(summary)
+        with clock.stage("metrics"):
+            summary.update(general_metrics(recording))
+            if failure is None and closed_loop:
+                summary.update(tracking_metrics(recording, setup.actuator.cylinder.stroke))
+            elif failure is None and step_time is not None:
+                summary.update(step_metrics(recording, step_time))
+        with clock.stage("plot"):
+            plot_rig_run(recording, folder / "rig.png", title=description)
+    with clock.stage("run folder"):
+        writer.write_summary(summary)
     if failure is not None:
         raise failure
     return result, summary

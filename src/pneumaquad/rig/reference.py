@@ -12,7 +12,6 @@ import time
 from typing import NamedTuple
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from pneumaquad.core.control.pid import pid_update
 from pneumaquad.core.jit import compiled
@@ -248,6 +247,8 @@ def simulate_rig_reference(
     sees the rig's state record as a float vector (:func:`~pneumaquad.core.layout.float_view`,
     the same memory): the edge where named fields become columns.
     """
+    from scipy import integrate  # SciPy's integrators load only for a reference run
+
     method = {"radau": "Radau", "lsoda": "LSODA"}.get(setup.simulation.integrator, "Radau")
     bank = rig_bank(setup)
     params, state, supply, outputs = bank.actuator_arrays
@@ -293,7 +294,7 @@ def simulate_rig_reference(
                     failure = f"the rate of {_STATE_NAMES[ACTUATOR_STATE_DTYPE.names[column]]}"
                 else:
                     try:
-                        solution = solve_ivp(
+                        solution = integrate.solve_ivp(
                             _active_rates,
                             (0.0, dt),
                             y[active],

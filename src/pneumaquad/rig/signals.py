@@ -7,7 +7,6 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from scipy.io import loadmat
 
 #: Most samples of a recorded reference on the control grid (as the command line's limit
 #: of 10 million control steps per run).
@@ -129,6 +128,7 @@ def recorded_reference(
         raise RecordedReferenceError(f"reference file {str(path)!r} does not exist")
     if path.suffix.lower() == ".mat":
         try:
+            from scipy.io import loadmat  # SciPy loads on first use: it is slow to import
             contents = loadmat(path, squeeze_me=True)
         except (NotImplementedError, ValueError) as error:
             raise RecordedReferenceError(f"{path}: cannot read MATLAB file ({error})") from error

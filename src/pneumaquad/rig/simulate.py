@@ -28,6 +28,7 @@ from pneumaquad.core.jit import compiled
 from pneumaquad.core.kernel import step_rigs
 from pneumaquad.io.interruption import deferred_interrupt
 from pneumaquad.io.run_folder import RunRecorder
+from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.rig.model import rig_bank
 from pneumaquad.rig.recording import (
@@ -133,6 +134,7 @@ def simulate_rig(
     recorder: RunRecorder | None = None,
     progress: ProgressCallback | None = None,
     chunk_steps: int = 500,
+    clock: StageClock | None = None,
 ) -> RigResult:
     """Simulate the rig with the integrator named in ``setup.simulation.integrator``.
 
@@ -152,6 +154,9 @@ def simulate_rig(
         Called with (steps done, total steps).
     chunk_steps : int
         Steps per compiled call; Ctrl-C is honoured between chunks.
+    clock : StageClock, optional
+        Receives the wall time of the compiled steps (``"simulation"``) and of checking
+        and recording the rows (``"recording"``), fixed step only.
 
     Returns
     -------
@@ -169,7 +174,7 @@ def simulate_rig(
         return simulate_rig_reference(setup, signal, closed_loop, recorder, progress)
     signals = np.asarray(signal, dtype=float).reshape(1, -1)
     return _simulate_fixed([setup], signals, closed_loop, [recorder], progress,
-                           chunk_steps, several=False)[0]
+                           chunk_steps, several=False, clock=clock)[0]
 
 
 def simulate_rigs(
@@ -241,9 +246,10 @@ def simulate_rigs(
 
 def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bool,
                     recorders: list[RunRecorder | None], progress: ProgressCallback | None,
-                    chunk_steps: int, several: bool) -> list[RigResult]:
+                    chunk_steps: int, several: bool,
+                    clock: StageClock | None = None) -> list[RigResult]:
     """The fixed-step run of :func:`simulate_rigs` (``several``: name the rig of a
-    divergence)."""
+    divergence; ``clock``: time the compiled steps and the recording)."""
     bank = rig_bank(setups)
     rigs, total = signals.shape
     signals = np.ascontiguousarray(signals, dtype=float)
@@ -258,9 +264,14 @@ def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bo
         try:
             while done < total and not stop.requested:
                 count = min(chunk_steps, total - done)
+                begun = time.perf_counter()
                 run_rig_chunk(bank.actuator_arrays, bank.controller_arrays, closed_loop,
                               signals, done, count, dt, substeps, records)
+                computed = time.perf_counter()
                 _record_chunk(rows, done, count, skipped, recorders, started, several)
+                if clock is not None:
+                    clock.add("simulation", computed - begun)
+                    clock.add("recording", time.perf_counter() - computed)
                 done += count
                 if progress is not None:
                     progress(done, total)
