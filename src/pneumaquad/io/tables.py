@@ -21,6 +21,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,7 +33,7 @@ import pyarrow as pa
 import pyarrow.csv as pa_csv
 import pyarrow.parquet as pq
 
-__all__ = ["StreamedTable", "TableMetadata", "quantity_and_unit", "read_table",
+__all__ = ["RowBuffer", "StreamedTable", "TableMetadata", "quantity_and_unit", "read_table",
            "read_table_metadata"]
 
 _NAMED = re.compile(r"^(?P<quantity>.*\S)\s*\[(?P<unit>[^\[\]]*)\]$")
@@ -250,3 +251,51 @@ def read_table_metadata(path: Path) -> TableMetadata:
     split = {name: quantity_and_unit(name) for name in header}
     return TableMetadata({n: u for n, (_, u) in split.items()},
                          {n: q for n, (q, _) in split.items()}, {})
+
+
+class RowBuffer:
+    """Rows gathered in a preallocated block and handed to a table one block at a time.
+
+    A recording that produces one row per control chunk fills ``row()`` in place and
+    calls ``commit()``; the block goes to the table when it is full, when ``max_delay``
+    seconds of wall time have passed since its first row, and on :meth:`flush` (which a
+    run calls at its end, also after Ctrl-C or an error, so nothing recorded is lost).
+
+    Parameters
+    ----------
+    table : StreamedTable
+        Receives the blocks (:meth:`StreamedTable.append`).
+    block_rows : int
+        Rows per block.
+    max_delay : float
+        Longest wall time [s] a committed row waits before it is written.
+    """
+
+    def __init__(self, table: StreamedTable, block_rows: int = 64,
+                 max_delay: float = 1.0) -> None:
+        if block_rows < 1:
+            raise ValueError(f"block_rows must be at least 1, got {block_rows}")
+        self.table = table
+        self.max_delay = max_delay
+        self._block = np.full((block_rows, len(table.columns)), np.nan)
+        self._count = 0
+        self._first_commit = 0.0
+
+    def row(self) -> np.ndarray:
+        """The next row to fill: a view into the block, valid until :meth:`commit`."""
+        return self._block[self._count]
+
+    def commit(self) -> None:
+        """Keep the row just filled; write the block when it is full or old enough."""
+        now = time.perf_counter()
+        if self._count == 0:
+            self._first_commit = now
+        self._count += 1
+        if self._count == self._block.shape[0] or now - self._first_commit > self.max_delay:
+            self.flush()
+
+    def flush(self) -> None:
+        """Hand the committed rows to the table (a no-op when there are none)."""
+        if self._count:
+            self.table.append(self._block[: self._count])
+            self._count = 0

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from pneumaquad.io.run_folder import RunFolderWriter, create_run_folder
+from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.params.schema import Bounds
 from pneumaquad.params.settings import Setting, check_settings
 from pneumaquad.reporting.robot_plots import plot_walking
@@ -157,6 +158,7 @@ def run_walk(
     description: str | None = None,
     progress: Callable[[float, float], None] | None = None,
     figure_title: str | None = None,
+    clock: StageClock | None = None,
 ) -> JudgedWalk:
     """Stand up, walk, stop; write the run folder and judge the walk (module docstring).
 
@@ -174,6 +176,9 @@ def run_walk(
         Called with (simulated time, total time) [s] as the run goes.
     figure_title : str, optional
         Title of ``walking.png``.
+    clock : StageClock, optional
+        Receives the wall time of the planning, of each stage of the run
+        (:func:`~pneumaquad.robot.experiment.run_phases`) and of the judgement.
 
     Raises
     ------
@@ -182,21 +187,25 @@ def run_walk(
     SimulationDivergedError
         After writing the run folder, when the simulation diverged (not judged).
     """
-    phases, plan = plan_walking(simulation, settings)
+    clock = StageClock() if clock is None else clock
+    with clock.stage("walk plan"):
+        phases, plan = plan_walking(simulation, settings)
     robot = simulation.robot
     where = f"{settings.distance:g} m on {robot.environment}"
     folder = create_run_folder(output, f"walk-{robot.environment}")
     run = run_phases(simulation, phases, folder, description or f"quadruped: walk {where}",
-                     progress)
+                     progress, clock=clock)
     if run.interrupted or "walk" not in run.summary["phases"]:
         return JudgedWalk(run, plan, None, None)
-    tip_over = tip_over_series(run.recording, run.summary, robot, plan)
-    outcome = walking_outcome(run.recording, run.summary, settings, robot, tip_over)
-    outcome["planned smallest static margin [m]"] = float(plan.margins.min())
-    outcome["planned unreachable IK samples [count]"] = int(
-        sum(plan.cycle.unreachable_counts.values()))
-    figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
-                          figure_title or f"walk {where}")
+    with clock.stage("walk judgement"):
+        tip_over = tip_over_series(run.recording, run.summary, robot, plan)
+        outcome = walking_outcome(run.recording, run.summary, settings, robot, tip_over)
+        outcome["planned smallest static margin [m]"] = float(plan.margins.min())
+        outcome["planned unreachable IK samples [count]"] = int(
+            sum(plan.cycle.unreachable_counts.values()))
+    with clock.stage("plots"):
+        figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
+                              figure_title or f"walk {where}")
     RunFolderWriter(folder).update_summary({"walking": outcome})
     run.summary["walking"] = outcome
     return JudgedWalk(run, plan, outcome, figure)

@@ -29,9 +29,11 @@ import numpy as np
 
 from pneumaquad.io.interruption import deferred_interrupt
 from pneumaquad.io.run_folder import RunFolderWriter
+from pneumaquad.io.stage_clock import StageClock
+from pneumaquad.io.tables import RowBuffer
 
 from .coupling import MODE_CLOSED_LOOP, MODE_OPEN_LOOP, MODE_UNCOMMANDED
-from .recording import recording_columns, recording_row
+from .recording import fill_recording_row, recording_columns
 from .simulation import RobotSimulation, SimulationDivergedError
 
 __all__ = ["Phase", "RobotRun", "run_phases", "tank_endurance"]
@@ -122,27 +124,51 @@ def run_phases(
     description: str,
     progress: Callable[[float, float], None] | None = None,
     extra_summary: dict[str, Any] | None = None,
+    clock: StageClock | None = None,
 ) -> RobotRun:
-    """Play ``phases`` on ``simulation`` and write the run folder (module docstring)."""
+    """Play ``phases`` on ``simulation`` and write the run folder (module docstring).
+
+    ``clock`` (optional) receives the wall time of each stage: ``"simulation"`` (the
+    compiled steps: MuJoCo, actuators and joint controllers), ``"references"`` (planned
+    references) or ``"walking feedback"`` (reference functions that read the state once
+    per chunk), ``"recording"`` (rows, CSV and Parquet, trajectory) and ``"run folder"``.
+    The summary's ``"wall time [s]"`` is the whole run from the first phase to the
+    recording written.
+    """
+    clock = StageClock() if clock is None else clock
     robot = simulation.robot
     writer = RunFolderWriter(folder)
-    writer.write_parameters(robot.parameters)
-    writer.write_model(robot.to_xml())
+    with clock.stage("run folder"):
+        writer.write_parameters(robot.parameters)
+        writer.write_model(robot.to_xml())
     every = robot.parameters.simulation.recording_every
     dt = simulation.control_step
     count = robot.joint_count
     total = sum(p.duration for p in phases)
-    times, qpos = [], []
+    samples = sum(-(-round(p.duration / dt) // every) for p in phases) + 1
+    times = np.empty(samples)
+    qpos = np.empty((samples, simulation.model.nq))
+    recorded = 0
     interrupted = False
     started = time.perf_counter()
     columns = recording_columns(simulation)
     phase_starts = []
     controlled = np.zeros(count, dtype=bool)
     failure: Exception | None = None
+    stepping = feedback_seconds = reference_seconds = recording_seconds = 0.0
+    chunks = 0
     with writer.recorder(columns) as recorder, deferred_interrupt() as stop:
-        recorder.append(recording_row(simulation, simulation.reference_angles))
-        times.append(simulation.time)
-        qpos.append(simulation.data.qpos.copy())
+        rows_out = RowBuffer(recorder)
+
+        def record(reference_angles: np.ndarray) -> None:
+            nonlocal recorded
+            fill_recording_row(simulation, reference_angles, rows_out.row())
+            rows_out.commit()
+            times[recorded] = simulation.time
+            qpos[recorded] = simulation.data.qpos
+            recorded += 1
+
+        record(simulation.reference_angles)
         try:
             for phase in phases:
                 phase_starts.append((phase.name, simulation.time))
@@ -151,7 +177,9 @@ def run_phases(
                 voltages = phase.open_loop_voltage
                 steps = round(phase.duration / dt)
                 if not phase.feedback:
+                    begun = time.perf_counter()
                     table = _reference_table(phase, simulation.time, steps, dt, count)
+                    reference_seconds += time.perf_counter() - begun
                 simulation.joint_control["mode"] = modes
                 simulation.stop_force_tracking()  # a feedback phase may track forces
                 if voltages is not None:
@@ -161,16 +189,22 @@ def run_phases(
                 done = 0
                 while done < steps and not stop.requested:
                     chunk = min(every, steps - done)
+                    begun = time.perf_counter()
                     if phase.feedback:
                         rows = _reference_table(phase, simulation.time, chunk, dt, count)
+                        fed = time.perf_counter()
+                        feedback_seconds += fed - begun
                         simulation.step(chunk, rows, 0)
                     else:
                         rows = table[done : done + chunk]
+                        fed = begun
                         simulation.step(chunk, table, done)
+                    stepped = time.perf_counter()
+                    stepping += stepped - fed
                     done += chunk
-                    recorder.append(recording_row(simulation, rows[-1]))
-                    times.append(simulation.time)
-                    qpos.append(simulation.data.qpos.copy())
+                    chunks += 1
+                    record(rows[-1])
+                    recording_seconds += time.perf_counter() - stepped
                     if progress is not None and done % (every * 20) == 0:
                         progress(simulation.time, total)
                 if stop.requested:
@@ -178,20 +212,33 @@ def run_phases(
                     break
         except SimulationDivergedError as error:
             failure = error  # keep what was recorded before it; re-raised below
+        finally:
+            rows_out.flush()
         recording = recorder.to_arrays()
+        closing = time.perf_counter()
+    recording_seconds += time.perf_counter() - closing  # the Parquet file
+    begun = time.perf_counter()
+    writer.write_trajectory(times[:recorded], qpos[:recorded])
+    recording_seconds += time.perf_counter() - begun
     wall = time.perf_counter() - started
-    writer.write_trajectory(np.array(times), np.array(qpos))
-    summary = _summary(
-        simulation, recording, description, wall, interrupted, phase_starts, controlled
-    )
-    if extra_summary:
-        summary.update(extra_summary)
-    summary["diverged"] = failure is not None
-    summary["divergences [count]"] = simulation.divergences
-    if failure is not None:
-        summary["error"] = str(failure)
-        summary["diverged at [s]"] = failure.time
-    writer.write_summary(summary)
+    clock.add("simulation", stepping, chunks)
+    if reference_seconds:
+        clock.add("references", reference_seconds)
+    if feedback_seconds:
+        clock.add("walking feedback", feedback_seconds)
+    clock.add("recording", recording_seconds, recorded)
+    with clock.stage("run folder"):
+        summary = _summary(
+            simulation, recording, description, wall, interrupted, phase_starts, controlled
+        )
+        if extra_summary:
+            summary.update(extra_summary)
+        summary["diverged"] = failure is not None
+        summary["divergences [count]"] = simulation.divergences
+        if failure is not None:
+            summary["error"] = str(failure)
+            summary["diverged at [s]"] = failure.time
+        writer.write_summary(summary)
     if failure is not None:
         raise failure
     return RobotRun(recording, summary, interrupted, wall, folder)

@@ -30,6 +30,7 @@ __all__ = [
     "JOINT_QUANTITIES",
     "Column",
     "RowSources",
+    "fill_recording_row",
     "recording_columns",
     "recording_row",
     "thorax_attitude",
@@ -176,10 +177,34 @@ def recording_row(simulation: RobotSimulation, reference_angles: np.ndarray) -> 
     ``reference_angles`` [rad] are the joint-angle references recorded with the row
     (the simulation's own, or a planned trajectory's sample).
     """
-    row = RowSources(simulation, reference_angles, simulation.foot_positions(),
-                     simulation.foot_normal_forces(), thorax_attitude(simulation))
-    per_joint = np.column_stack([column.source(row) for column in JOINT_COLUMNS]).ravel()
-    thorax = np.array([column.source(row) for column in THORAX_COLUMNS], dtype=float)
-    feet = np.column_stack([column.source(row) for column in FOOT_COLUMNS]).ravel()
-    body = np.array([column.source(row) for column in BODY_COLUMNS], dtype=float)
-    return np.concatenate([[simulation.time], per_joint, thorax, feet, body])
+    joints, legs = simulation.robot.joint_count, len(simulation.robot.legs)
+    row = np.empty(1 + joints * len(JOINT_COLUMNS) + len(THORAX_COLUMNS)
+                   + legs * len(FOOT_COLUMNS) + len(BODY_COLUMNS))
+    fill_recording_row(simulation, reference_angles, row)
+    return row
+
+
+def fill_recording_row(simulation: RobotSimulation, reference_angles: np.ndarray,
+                       row: np.ndarray) -> None:
+    """Write the current state into ``row`` in place (the layout of
+    :func:`recording_columns`, ``row`` as long as it): what :func:`recording_row`
+    returns, without a new array, for a row of a preallocated block."""
+    sources = RowSources(simulation, reference_angles, simulation.foot_positions(),
+                         simulation.foot_normal_forces(), thorax_attitude(simulation))
+    joints, legs = simulation.robot.joint_count, len(simulation.robot.legs)
+    row[0] = simulation.time
+    start = 1
+    per_joint = row[start:start + joints * len(JOINT_COLUMNS)].reshape(joints, -1)
+    for index, column in enumerate(JOINT_COLUMNS):
+        per_joint[:, index] = column.source(sources)
+    start += per_joint.size
+    for column in THORAX_COLUMNS:
+        row[start] = column.source(sources)
+        start += 1
+    per_leg = row[start:start + legs * len(FOOT_COLUMNS)].reshape(legs, -1)
+    for index, column in enumerate(FOOT_COLUMNS):
+        per_leg[:, index] = column.source(sources)
+    start += per_leg.size
+    for column in BODY_COLUMNS:
+        row[start] = column.source(sources)
+        start += 1
