@@ -15,13 +15,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+import mujoco
 import numpy as np
 
 from pneumaquad.locomotion.walk import thorax_rotation
-from pneumaquad.robot.kinematics import forward_kinematics_dh
-from pneumaquad.robot.legs import leg_dh_table, shift_feet
-from pneumaquad.robot.recording import thorax_attitude
+from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
+from pneumaquad.robot.legs import leg_dh_table
 from pneumaquad.robot.simulation import RobotSimulation
+
+from .feedback_kernels import HEADING, HEADING_SET, LAST_TIME, ROTATION, heading_step
 
 __all__ = ["HeadingHold"]
 
@@ -39,6 +41,10 @@ class HeadingHold:
         Rate at which the yaw error [rad] is integrated into the foot rotation.
     limit : float [rad]
         Largest foot rotation.
+
+    The arithmetic of a call is compiled (:func:`.feedback_kernels.heading_step`) on
+    arrays allocated here; :attr:`heading`, :attr:`rotation` and :attr:`last_time` are
+    views of its state.
     """
 
     def __init__(self, simulation: RobotSimulation,
@@ -50,29 +56,52 @@ class HeadingHold:
         self.limit = limit
         robot = simulation.robot
         self.tables = [leg_dh_table(robot, leg) for leg in robot.legs]
-        self.to_body = thorax_rotation(robot)  # thorax → body frame
-        self.heading: float | None = None
-        self.rotation = 0.0  # [rad] of the commanded feet about the body's z axis
-        self.last_time = simulation.time
+        self.to_body = np.ascontiguousarray(thorax_rotation(robot))  # thorax → body frame
+        self._stacked = stack_leg_tables(self.tables)
+        self._workspace = chain_workspace()
+        self._matrices = np.zeros((3, 3, 3))
+        self._thorax_matrix = simulation.data.xmat[robot.thorax_id]  # a view, thorax → world
+        nominal = np.zeros(9)
+        mujoco.mju_quat2Mat(nominal, simulation.model.body_quat[robot.thorax_id])
+        self._nominal = nominal.reshape(3, 3)
+        # heading [rad], heading set (0/1), foot rotation [rad], last call's time [s]
+        self._state = np.zeros(4)
+        self._state[LAST_TIME] = simulation.time
+
+    @property
+    def heading(self) -> float | None:
+        """Yaw [rad] to hold; None until the first call fixes it."""
+        return float(self._state[HEADING]) if self._state[HEADING_SET] else None
+
+    @heading.setter
+    def heading(self, value: float | None) -> None:
+        self._state[HEADING_SET] = 0.0 if value is None else 1.0
+        self._state[HEADING] = 0.0 if value is None else value
+
+    @property
+    def rotation(self) -> float:
+        """Rotation [rad] of the commanded feet about the body's z axis."""
+        return float(self._state[ROTATION])
+
+    @rotation.setter
+    def rotation(self, value: float) -> None:
+        self._state[ROTATION] = value
+
+    @property
+    def last_time(self) -> float:
+        """Simulation time [s] of the last call (of the construction before it)."""
+        return float(self._state[LAST_TIME])
+
+    @last_time.setter
+    def last_time(self, value: float) -> None:
+        self._state[LAST_TIME] = value
 
     def __call__(self, times: np.ndarray) -> np.ndarray:
         """Joint references (len(times), joints) [rad] for the next chunk."""
-        simulation = self.simulation
         rows = np.array(self.references(times), dtype=float)
-        yaw = float(thorax_attitude(simulation)[2])
-        if self.heading is None:
-            self.heading = yaw
-        error = math.remainder(yaw - self.heading, 2.0 * math.pi)
-        interval = simulation.time - self.last_time
-        self.last_time = simulation.time
-        self.rotation = float(np.clip(self.rotation + self.gain * error * interval,
-                                      -self.limit, self.limit))
-        if self.rotation == 0.0:
-            return rows
-        cos, sin = math.cos(self.rotation), math.sin(self.rotation)
-        turn = np.array([[cos, -sin, 0.0], [sin, cos, 0.0], [0.0, 0.0, 1.0]])
-        turn_thorax = self.to_body.T @ turn @ self.to_body
-        reference = rows[len(rows) // 2]
-        feet = np.array([forward_kinematics_dh(table, reference[3 * leg : 3 * leg + 3])
-                         for leg, table in enumerate(self.tables)])  # thorax frame
-        return shift_feet(rows, self.tables, feet @ turn_thorax.T - feet)
+        singular = heading_step(rows, self._thorax_matrix, self._nominal, self.to_body,
+                                self._stacked, self._workspace, self._matrices, self._state,
+                                self.simulation.time, self.gain, self.limit)
+        if singular >= 0:
+            raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
+        return rows

@@ -23,6 +23,9 @@ Here every stance leg is instead *told* its load, once per control chunk:
    loop only adds a spring of stiffness Kp / k_F about the planned foot position.
 
 A swinging leg (share 0) is under plain position control.
+
+The per-chunk arithmetic is compiled (:mod:`.stance_kernels`); the functions of this
+module with array arguments are its reference in NumPy.
 """
 
 from __future__ import annotations
@@ -32,14 +35,22 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from pneumaquad.gait.crawl import CrawlGait, leg_phases
-from pneumaquad.gait.stability import centre_of_mass
-from pneumaquad.robot.feedback import foot_jacobian_world, leg_dof_addresses
-from pneumaquad.robot.linkage import moment_arm
+from pneumaquad.gait.crawl import CrawlGait
 from pneumaquad.robot.simulation import RobotSimulation
 
-__all__ = ["StanceControlSettings", "StanceController", "cylinder_forces_for_foot_force",
-           "desired_normal_forces", "load_shares", "track_stance_loads"]
+from .feedback_kernels import gait_timing
+from .stance_kernels import (
+    centre_of_mass_into,
+    cylinder_forces_into,
+    normal_forces_into,
+    stance_step,
+    stance_views,
+    stance_workspace,
+)
+
+__all__ = ["StanceControlSettings", "StanceController", "StanceLoads",
+           "cylinder_forces_for_foot_force", "desired_normal_forces", "load_shares",
+           "track_stance_loads"]
 
 Array = NDArray[np.float64]
 
@@ -147,6 +158,69 @@ def cylinder_forces_for_foot_force(jacobian: ArrayLike, bias_torques: ArrayLike,
     return torques / np.asarray(moment_arms, dtype=float)
 
 
+class StanceLoads:
+    """Cylinder force set-points of the stance legs of one simulation, as statics asks.
+
+    Holds the simulation's :class:`.stance_kernels.StanceViews` and a workspace, so a call
+    runs the compiled arithmetic of :mod:`.stance_kernels` and two calls into the
+    simulation (force tracking for the loaded legs' cylinders, plain position control for
+    the others).
+
+    Parameters
+    ----------
+    simulation : RobotSimulation
+        Read (feet, centre of mass, Jacobians, joint angles) and commanded (force
+        set-points).
+    """
+
+    def __init__(self, simulation: RobotSimulation) -> None:
+        self.simulation = simulation
+        self.views = stance_views(simulation)
+        self.workspace = stance_workspace()
+        legs = len(self.views.foot_sites)
+        self.set_points = np.zeros(3 * legs)  # [N] of the loaded legs' cylinders
+        joints = [simulation.robot.joint_names.index(f"{leg}_alpha") + np.arange(3)
+                  for leg in simulation.robot.legs]
+        # per set of loaded legs (bits): the joints that track and those that do not
+        self._tracked = [np.concatenate([joints[leg] for leg in range(legs) if bits >> leg & 1]
+                                        + [np.zeros(0, dtype=int)]) for bits in range(2**legs)]
+        self._released = [np.concatenate([joints[leg] for leg in range(legs)
+                                          if not bits >> leg & 1] + [np.zeros(0, dtype=int)])
+                          for bits in range(2**legs)]
+
+    def fallback_normal_forces(self, shares: Array, normal: Array) -> None:
+        """Normal forces [N] into ``normal`` by :func:`desired_normal_forces` (least
+        squares), where the compiled elimination refused the system."""
+        normal[:] = desired_normal_forces(self.simulation.foot_positions(),
+                                          self.workspace.centre, self.views.weight, shares)
+
+    def apply(self, loaded: int, force_gain: float, stiffness: float) -> None:
+        """Track ``self.set_points`` on the cylinders of the ``loaded`` legs (bits) with
+        ``force_gain`` [V/N] and ``stiffness``; plain position control for the others."""
+        tracked, released = self._tracked[loaded], self._released[loaded]
+        if len(released):
+            self.simulation.stop_force_tracking(released)
+        if len(tracked):
+            self.simulation.track_forces(self.set_points[: len(tracked)], force_gain, tracked,
+                                         stiffness)
+
+    def track(self, shares: ArrayLike, force_gain: float, stiffness: float = 1.0) -> Array:
+        """:func:`track_stance_loads` for this simulation; returns the desired normal
+        forces (legs,) [N]."""
+        shares = np.array(shares, dtype=float)
+        normal = np.zeros(len(shares))
+        views = self.views
+        centre_of_mass_into(views.body_mass, views.body_centres, views.total_mass,
+                            self.workspace.centre)
+        if not normal_forces_into(views.site_positions, views.foot_sites,
+                                  self.workspace.centre, views.weight, shares,
+                                  self.workspace, normal):
+            self.fallback_normal_forces(shares, normal)
+        loaded = cylinder_forces_into(views, shares, normal, self.set_points)
+        self.apply(loaded, force_gain, stiffness)
+        return normal
+
+
 def track_stance_loads(simulation: RobotSimulation, shares: ArrayLike,
                        force_gain: float, stiffness: float = 1.0) -> Array:
     """Set every leg's cylinders to carry its statics share of the robot's weight.
@@ -155,29 +229,13 @@ def track_stance_loads(simulation: RobotSimulation, shares: ArrayLike,
     the whole robot's weight about its measured centre of mass) become each leg's
     cylinder force set-points (:func:`cylinder_forces_for_foot_force`, vertical foot force,
     the leg's Jacobian and gravity torques at the present state), tracked with
-    ``force_gain`` [V/N]; legs of share 0 return to plain position control.
+    ``force_gain`` [V/N]; legs of share 0 return to plain position control. (Compiled,
+    :mod:`.stance_kernels`; :class:`StanceLoads` keeps what this gathers for repeated
+    calls.)
 
     Returns the desired normal forces (legs,) [N].
     """
-    robot, model, data = simulation.robot, simulation.model, simulation.data
-    weight = float(model.body_mass.sum() * np.linalg.norm(model.opt.gravity))
-    shares = np.asarray(shares, dtype=float)
-    normal = desired_normal_forces(simulation.foot_positions(), centre_of_mass(model, data),
-                                   weight, shares)
-    angles = simulation.joint_angles()
-    for leg, name in enumerate(robot.legs):
-        joints = robot.joint_names.index(f"{name}_alpha") + np.arange(3)
-        if shares[leg] <= 0.0:
-            simulation.stop_force_tracking(joints)
-            continue
-        dofs = leg_dof_addresses(robot, name)
-        jacobian = foot_jacobian_world(model, data, int(robot.foot_site_id[leg]), dofs)
-        arms = np.array([moment_arm(robot.linkages[robot.joint_types[j]], angles[j])
-                         for j in joints])
-        forces = cylinder_forces_for_foot_force(jacobian, data.qfrc_bias[dofs], arms,
-                                                np.array([0.0, 0.0, normal[leg]]))
-        simulation.track_forces(forces, force_gain, joints, stiffness)
-    return normal
+    return StanceLoads(simulation).track(shares, force_gain, stiffness)
 
 
 class StanceController:
@@ -209,21 +267,43 @@ class StanceController:
         self.start = start
         self.references = references
         self.settings = settings or StanceControlSettings()
-        #: Rows of (time [s], load shares (legs), desired normal forces (legs) [N]).
-        self.log: list[Array] = []
+        self.loads = StanceLoads(simulation)
+        self.timing = gait_timing(gait)
+        legs = len(self.timing.offsets)
+        self._log = np.zeros((64, 1 + 2 * legs))
+        self._logged = 0
+
+    @property
+    def log(self) -> Array:
+        """Rows of (time [s], load shares (legs), desired normal forces (legs) [N]), one
+        per call (a copy)."""
+        return self._log[: self._logged].copy()
+
+    def _update(self) -> Array:
+        """Set the force set-points for the present state; the log row written."""
+        simulation, settings, loads = self.simulation, self.settings, self.loads
+        if self._logged == len(self._log):
+            self._log = np.concatenate([self._log, np.zeros_like(self._log)])
+        row = self._log[self._logged]
+        self._logged += 1
+        legs = len(self.timing.offsets)
+        time = simulation.time
+        row[0] = time
+        shares, normal = row[1 : 1 + legs], row[1 + legs :]
+        loaded = stance_step(loads.views, self.timing, time - self.start, settings.rise,
+                             settings.fall, loads.workspace, shares, normal, loads.set_points)
+        if loaded < 0:
+            loads.fallback_normal_forces(shares, normal)
+            loaded = cylinder_forces_into(loads.views, shares, normal, loads.set_points)
+        loads.apply(loaded, settings.force_gain, settings.stiffness)
+        return normal
 
     def update(self) -> Array:
         """Set the force set-points for the present state; return the desired normal
         forces (legs,) [N]."""
-        simulation, settings = self.simulation, self.settings
-        phases = leg_phases(self.gait, np.array([simulation.time - self.start]))[0]
-        shares = load_shares(phases, self.gait.duty_factor, settings.rise, settings.fall)
-        normal = track_stance_loads(simulation, shares, settings.force_gain,
-                                    settings.stiffness)
-        self.log.append(np.concatenate([[simulation.time], shares, normal]))
-        return normal
+        return self._update().copy()
 
     def __call__(self, times: np.ndarray) -> np.ndarray:
         """Planned joint references (len(times), joints) [rad] for the next chunk."""
-        self.update()
+        self._update()
         return self.references(times)

@@ -21,10 +21,12 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from pneumaquad.gait.crawl import CrawlGait, foot_positions_ground, stance_flags
-from pneumaquad.robot.kinematics import forward_kinematics_dh
-from pneumaquad.robot.legs import leg_dh_table, shift_feet
+from pneumaquad.gait.crawl import CrawlGait
+from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
+from pneumaquad.robot.legs import leg_dh_table
 from pneumaquad.robot.simulation import RobotSimulation
+
+from .feedback_kernels import gait_timing, swing_step
 
 __all__ = ["SwingHeightCorrection"]
 
@@ -49,6 +51,10 @@ class SwingHeightCorrection:
         Largest correction.
     fade : float [s]
         Time constant of the correction's fade after touchdown.
+
+    The arithmetic of a call is compiled (:func:`.feedback_kernels.swing_step`) on arrays
+    allocated here: :attr:`lift_off_height`, :attr:`was_stance` and :attr:`correction`
+    are updated in place.
     """
 
     def __init__(self, simulation: RobotSimulation, gait: CrawlGait, start: float,
@@ -65,40 +71,34 @@ class SwingHeightCorrection:
         self.lift_off_height = simulation.foot_positions()[:, 2].copy()  # [m] world z
         self.was_stance = np.ones(len(robot.legs), dtype=bool)
         self.correction = np.zeros(len(robot.legs))  # [m] world z, per leg
-        self.last_time = simulation.time
+        self._clock = np.array([simulation.time])  # [s] of the last call
+        self._timing = gait_timing(gait)
+        self._stacked = stack_leg_tables(self.tables)
+        self._workspace = chain_workspace()
+        data = simulation.data
+        self._thorax_matrix = data.xmat[robot.thorax_id]  # views: thorax → world, ...
+        self._thorax_position = data.xpos[robot.thorax_id]  # ... thorax origin [m]
+        self._site_positions = data.site_xpos  # [m]
+        self._foot_sites = np.asarray(robot.foot_site_id, dtype=np.int64)
 
-    def _planned_lift(self, time: float) -> Array:
-        return foot_positions_ground(self.gait, np.array([time]))[0, :, 2]
+    @property
+    def last_time(self) -> float:
+        """Simulation time [s] of the last call (of the construction before it)."""
+        return float(self._clock[0])
+
+    @last_time.setter
+    def last_time(self, value: float) -> None:
+        self._clock[0] = value
 
     def __call__(self, times: np.ndarray) -> np.ndarray:
         """Joint references (len(times), joints) [rad] for the next chunk."""
-        simulation = self.simulation
         rows = np.array(self.references(times), dtype=float)
         middle = float(np.asarray(times)[len(times) // 2]) - self.start
-        stance = stance_flags(self.gait, np.array([middle]))[0]
-        feet = simulation.foot_positions()
-        lifting = self.was_stance & ~stance
-        self.lift_off_height[lifting] = feet[lifting, 2]
-        self.was_stance = stance
-        interval = simulation.time - self.last_time
-        self.last_time = simulation.time
-        data, robot = simulation.data, simulation.robot
-        thorax_rotation = data.xmat[robot.thorax_id].reshape(3, 3)  # thorax → world
-        thorax_height = float(data.xpos[robot.thorax_id][2])
-        lift = self._planned_lift(middle)
-        reference = rows[len(rows) // 2]
-        for leg, table in enumerate(self.tables):
-            if stance[leg]:
-                self.correction[leg] *= np.exp(-interval / self.fade)
-                continue
-            foot = forward_kinematics_dh(table, reference[3 * leg : 3 * leg + 3])
-            height = thorax_height + float(thorax_rotation[2] @ foot)  # world z [m]
-            target = self.lift_off_height[leg] + lift[leg]
-            # weighted by the planned lift, so the correction vanishes at lift-off and
-            # touchdown: the foot lands where planned, with no step in the reference
-            weight = lift[leg] / self.gait.step_height if self.gait.step_height else 0.0
-            self.correction[leg] = weight * float(
-                np.clip(target - height, -self.limit, self.limit))
-        up = np.zeros((len(self.tables), 3))
-        up[:, 2] = self.correction
-        return shift_feet(rows, self.tables, up @ thorax_rotation)  # world → thorax
+        singular = swing_step(rows, middle, self.simulation.time, self._thorax_matrix,
+                              self._thorax_position, self._site_positions, self._foot_sites,
+                              self._timing, self.lift_off_height, self.was_stance,
+                              self.correction, self._clock, self.limit, self.fade,
+                              self._stacked, self._workspace)
+        if singular >= 0:
+            raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
+        return rows

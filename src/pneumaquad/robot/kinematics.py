@@ -4,8 +4,11 @@ Three revolute joints in series (thesis section 3.1, Table 1); beta and gamma ar
 The zero pose is geometry (a point and unit axis per joint, the foot point, in one fixed
 "shoulder" frame) taken from the model's link frames; the DH table is derived from it. The
 forward kinematics and the Jacobian have one implementation, the compiled DH chain
-(:func:`_leg_frames`), for one set of angles or a batch; the tests check it against
-MuJoCo's own body and site positions. The inverse kinematics is in :mod:`.leg_ik`.
+(:func:`leg_frames_into`, :func:`leg_chain_into`), for one set of angles or a batch; the
+tests check it against MuJoCo's own body and site positions. The inverse kinematics is in
+:mod:`.leg_ik`. For compiled loops over legs (the walking feedback, once per control
+chunk) the tables stack into :class:`LegTables`, scratch comes in a
+:class:`ChainWorkspace`, and :func:`solve_3x3` takes the linear step through a Jacobian.
 
 Conventions: SI and radians; a positive angle turns right-handed about the joint axis;
 standard DH ``A_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i)`` with ``θ_i = q_i + theta_offset_i``.
@@ -15,7 +18,9 @@ FK and Jacobian accept batches of angles, shape ``(..., 3)``.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -227,11 +232,14 @@ def dh_from_geometry(geometry: LegGeometry) -> DHTable:
 
 
 @compiled
-def _leg_frames(theta_offset, d, alpha, a, base, angles, frames):
+def leg_frames_into(theta_offset: Array, d: Array, alpha: Array, a: Array, base: Array,
+                    angles: Array, frames: Array, link: Array) -> None:
     """Poses of DH frames 0..3 of one leg, ``base · A1 · A2 · A3``, written into ``frames``
-    (4, 4, 4) for one set of ``angles`` (3,) [rad] (compiled: the package's one DH chain)."""
+    (4, 4, 4) for one set of ``angles`` (3,) [rad]; ``link`` (4, 4) is scratch (compiled:
+    the package's one DH chain, with no allocation)."""
     frames[0, :, :] = base
-    link = np.zeros((4, 4))
+    link[2, 0] = 0.0
+    link[3, 0], link[3, 1], link[3, 2] = 0.0, 0.0, 0.0
     for i in range(3):
         theta = angles[i] + theta_offset[i]
         cos_t, sin_t = math.cos(theta), math.sin(theta)
@@ -249,12 +257,14 @@ def _leg_frames(theta_offset, d, alpha, a, base, angles, frames):
 
 
 @compiled
-def _leg_chain(theta_offset, d, alpha, a, base, tool, angles, foot, jacobian):
+def leg_chain_into(theta_offset: Array, d: Array, alpha: Array, a: Array, base: Array,
+                   tool: Array, angles: Array, frames: Array, link: Array, foot: Array,
+                   jacobian: Array) -> None:
     """Foot position (3,) [m] and Jacobian (3, 3) [m/rad] of one leg for one set of
-    ``angles`` (3,) [rad], written into ``foot`` and ``jacobian`` (compiled). Column i of
-    the Jacobian is ``z_(i-1) × (foot - o_(i-1))`` from the DH frames."""
-    frames = np.empty((4, 4, 4))
-    _leg_frames(theta_offset, d, alpha, a, base, angles, frames)
+    ``angles`` (3,) [rad], written into ``foot`` and ``jacobian``; ``frames`` (4, 4, 4) and
+    ``link`` (4, 4) are scratch (compiled, no allocation). Column i of the Jacobian is
+    ``z_(i-1) × (foot - o_(i-1))`` from the DH frames."""
+    leg_frames_into(theta_offset, d, alpha, a, base, angles, frames, link)
     for r in range(3):
         foot[r] = (frames[3, r, 0] * tool[0, 3] + frames[3, r, 1] * tool[1, 3]
                    + frames[3, r, 2] * tool[2, 3] + frames[3, r, 3] * tool[3, 3])
@@ -268,17 +278,102 @@ def _leg_chain(theta_offset, d, alpha, a, base, tool, angles, foot, jacobian):
 
 
 @compiled
+def _leg_chain(theta_offset, d, alpha, a, base, tool, angles, foot, jacobian):
+    """:func:`leg_chain_into` with its own scratch (compiled)."""
+    leg_chain_into(theta_offset, d, alpha, a, base, tool, angles, np.empty((4, 4, 4)),
+                   np.empty((4, 4)), foot, jacobian)
+
+
+@compiled
 def _leg_chain_batch(theta_offset, d, alpha, a, base, tool, angles, feet, jacobians):
-    """:func:`_leg_chain` for each row of ``angles`` (n, 3) [rad] (compiled loop)."""
+    """:func:`leg_chain_into` for each row of ``angles`` (n, 3) [rad] (compiled loop)."""
+    frames, link = np.empty((4, 4, 4)), np.empty((4, 4))
     for n in range(angles.shape[0]):
-        _leg_chain(theta_offset, d, alpha, a, base, tool, angles[n], feet[n], jacobians[n])
+        leg_chain_into(theta_offset, d, alpha, a, base, tool, angles[n], frames, link,
+                       feet[n], jacobians[n])
 
 
 @compiled
 def _leg_frames_batch(theta_offset, d, alpha, a, base, angles, frames):
-    """:func:`_leg_frames` for each row of ``angles`` (n, 3) [rad] (compiled loop)."""
+    """:func:`leg_frames_into` for each row of ``angles`` (n, 3) [rad] (compiled loop)."""
+    link = np.empty((4, 4))
     for n in range(angles.shape[0]):
-        _leg_frames(theta_offset, d, alpha, a, base, angles[n], frames[n])
+        leg_frames_into(theta_offset, d, alpha, a, base, angles[n], frames[n], link)
+
+
+class LegTables(NamedTuple):
+    """The DH tables of several legs stacked for compiled loops (row ``leg`` of each
+    array is that leg's :class:`DHTable` field)."""
+
+    theta_offset: Array  # (legs, 3) [rad]
+    d: Array  # (legs, 3) [m]
+    alpha: Array  # (legs, 3) [rad]
+    a: Array  # (legs, 3) [m]
+    base: Array  # (legs, 4, 4)
+    tool: Array  # (legs, 4, 4)
+
+
+def stack_leg_tables(tables: Sequence[DHTable]) -> LegTables:
+    """The legs' DH tables as one :class:`LegTables` (contiguous copies)."""
+    return LegTables(*(np.ascontiguousarray([getattr(table, name) for table in tables],
+                                            dtype=float)
+                       for name in LegTables._fields))
+
+
+class ChainWorkspace(NamedTuple):
+    """Scratch of the compiled leg-chain loops, allocated once by its owner."""
+
+    angles: Array  # (3,) [rad] one leg's joint angles
+    frames: Array  # (4, 4, 4) DH frame poses
+    link: Array  # (4, 4) one DH link transform
+    foot: Array  # (3,) [m] foot position
+    jacobian: Array  # (3, 3) [m/rad] foot Jacobian
+    elimination: Array  # (3, 4) augmented matrix of a 3×3 solve
+    step: Array  # (3,) [rad] solution of a 3×3 solve
+    shift: Array  # (3,) [m] a foot shift
+
+
+def chain_workspace() -> ChainWorkspace:
+    """A fresh :class:`ChainWorkspace`."""
+    return ChainWorkspace(np.zeros(3), np.zeros((4, 4, 4)), np.zeros((4, 4)), np.zeros(3),
+                          np.zeros((3, 3)), np.zeros((3, 4)), np.zeros(3), np.zeros(3))
+
+
+@compiled
+def solve_3x3(matrix: Array, right_side: Array, elimination: Array, solution: Array) -> bool:
+    """Solve ``matrix · solution = right_side`` for one 3×3 system (compiled, in place).
+
+    Gaussian elimination with partial pivoting (LAPACK ``gesv``'s method, written out for
+    three unknowns) on the augmented scratch ``elimination`` (3, 4); units are the
+    caller's. Returns False, leaving ``solution`` undefined, when a pivot is exactly zero
+    (a singular matrix, where :func:`numpy.linalg.solve` raises).
+    """
+    for row in range(3):
+        for column in range(3):
+            elimination[row, column] = matrix[row, column]
+        elimination[row, 3] = right_side[row]
+    for column in range(3):
+        pivot = column
+        for row in range(column + 1, 3):
+            if abs(elimination[row, column]) > abs(elimination[pivot, column]):
+                pivot = row
+        if elimination[pivot, column] == 0.0:
+            return False
+        if pivot != column:
+            for k in range(column, 4):
+                swap = elimination[column, k]
+                elimination[column, k] = elimination[pivot, k]
+                elimination[pivot, k] = swap
+        for row in range(column + 1, 3):
+            factor = elimination[row, column] / elimination[column, column]
+            for k in range(column + 1, 4):
+                elimination[row, k] -= factor * elimination[column, k]
+    for row in range(2, -1, -1):
+        total = elimination[row, 3]
+        for k in range(row + 1, 3):
+            total -= elimination[row, k] * solution[k]
+        solution[row] = total / elimination[row, row]
+    return True
 
 
 def _rows(angles: ArrayLike) -> tuple[Array, tuple[int, ...]]:

@@ -3,24 +3,38 @@
 The kinematic description of each leg is read off the compiled MuJoCo model at zero joint
 angles (joint anchors and axes, foot site), expressed in the thorax body frame, so the DH
 table (thesis Table 1, eq 3.1.1) comes from the same parameters as the dynamics.
+
+Small corrections of joint references (the walking feedback, once per control chunk) move
+a foot by the linear step of the IK through its Jacobian: :func:`shift_feet`, compiled in
+place as :func:`shift_feet_into` on stacked tables (:class:`.kinematics.LegTables`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import mujoco
 import numpy as np
 
+from pneumaquad.core.jit import compiled
+
 from .builder import RobotModel
 from .kinematics import (
+    ChainWorkspace,
     DHTable,
     LegGeometry,
+    LegTables,
+    chain_workspace,
     dh_from_geometry,
-    foot_jacobian,
     forward_kinematics_dh,
+    leg_chain_into,
+    solve_3x3,
+    stack_leg_tables,
 )
 from .leg_ik import IKResult, inverse_kinematics
 
-__all__ = ["leg_dh_table", "leg_geometry", "shift_feet", "solve_leg", "thorax_frame_points"]
+__all__ = ["add_leg_step", "leg_dh_table", "leg_geometry", "middle_leg_chain", "shift_feet",
+           "shift_feet_into", "solve_leg", "thorax_frame_points"]
 
 
 def leg_geometry(robot: RobotModel, leg: str) -> LegGeometry:
@@ -68,17 +82,66 @@ def thorax_frame_points(table: DHTable, angles: np.ndarray) -> np.ndarray:
     return forward_kinematics_dh(table, angles)
 
 
-def shift_feet(rows: np.ndarray, tables: list[DHTable], shifts: np.ndarray) -> np.ndarray:
+@compiled
+def middle_leg_chain(rows: np.ndarray, tables: LegTables, leg: int,
+                     workspace: ChainWorkspace) -> None:
+    """Foot position [m] and Jacobian [m/rad] of ``leg`` (thorax frame) at the middle row
+    of ``rows`` (n, 3·legs) [rad], written into ``workspace.foot`` and
+    ``workspace.jacobian`` (compiled; ``tables`` a :class:`.kinematics.LegTables`,
+    ``workspace`` a :class:`.kinematics.ChainWorkspace`)."""
+    middle = rows.shape[0] // 2
+    for k in range(3):
+        workspace.angles[k] = rows[middle, 3 * leg + k]
+    leg_chain_into(tables.theta_offset[leg], tables.d[leg], tables.alpha[leg], tables.a[leg],
+                   tables.base[leg], tables.tool[leg], workspace.angles, workspace.frames,
+                   workspace.link, workspace.foot, workspace.jacobian)
+
+
+@compiled
+def add_leg_step(rows: np.ndarray, leg: int, shift: np.ndarray,
+                 workspace: ChainWorkspace) -> bool:
+    """Add to every row of ``rows`` (n, 3·legs) [rad], in place, the joint step of ``leg``
+    that moves its foot by ``shift`` (3,) [m] through ``workspace.jacobian`` [m/rad]
+    (the linear step of the IK; compiled). Returns False, with ``rows`` unchanged, where
+    the Jacobian is singular."""
+    if not solve_3x3(workspace.jacobian, shift, workspace.elimination, workspace.step):
+        return False
+    for n in range(rows.shape[0]):
+        for k in range(3):
+            rows[n, 3 * leg + k] += workspace.step[k]
+    return True
+
+
+@compiled
+def shift_feet_into(rows: np.ndarray, tables: LegTables, shifts: np.ndarray,
+                    workspace: ChainWorkspace) -> int:
+    """:func:`shift_feet` in place (compiled): every leg whose shift (row of ``shifts``
+    (legs, 3) [m, thorax frame]) is not zero takes its :func:`add_leg_step` through its
+    Jacobian at the middle row (:func:`middle_leg_chain`). Returns -1, or the first leg
+    whose Jacobian is singular (the legs before it shifted)."""
+    for leg in range(shifts.shape[0]):
+        if shifts[leg, 0] != 0.0 or shifts[leg, 1] != 0.0 or shifts[leg, 2] != 0.0:
+            middle_leg_chain(rows, tables, leg, workspace)
+            if not add_leg_step(rows, leg, shifts[leg], workspace):
+                return leg
+    return -1
+
+
+def shift_feet(rows: np.ndarray, tables: Sequence[DHTable] | LegTables,
+               shifts: np.ndarray) -> np.ndarray:
     """Joint references ``rows`` (n, 3·legs) [rad] with each leg's foot moved by
     ``shifts[leg]`` (3,) [m, thorax frame], through the leg Jacobian at the chunk's middle
-    row (small shifts: the linear step of the IK). Returns a new array."""
-    corrected = np.array(rows, dtype=float)
-    middle = corrected[len(corrected) // 2].copy()
-    for leg, table in enumerate(tables):
-        if not np.any(shifts[leg]):
-            continue
-        angles = middle[3 * leg : 3 * leg + 3]
-        corrected[:, 3 * leg : 3 * leg + 3] += np.linalg.solve(foot_jacobian(table, angles),
-                                                               shifts[leg])
-    return corrected
+    row (small shifts: the linear step of the IK). Returns a new array.
 
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        Where a shifted leg's Jacobian is singular.
+    """
+    corrected = np.array(rows, dtype=float)
+    stacked = tables if isinstance(tables, LegTables) else stack_leg_tables(tables)
+    singular = shift_feet_into(corrected, stacked,
+                               np.ascontiguousarray(shifts, dtype=float), chain_workspace())
+    if singular >= 0:
+        raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
+    return corrected
