@@ -94,7 +94,7 @@ class PackageFunctionCache(FunctionCache):
 
 
 def compiled(
-    function: Callable[..., Any] | None = None, *, inline: bool = False
+    function: Callable[..., Any] | None = None, *, inline: bool = False, nogil: bool = False
 ) -> Callable[..., Any]:
     """Compile ``function`` with ``njit(error_model="numpy")``, cached in :func:`cache_folder`.
 
@@ -107,12 +107,18 @@ def compiled(
     bundles of arrays down a chain of calls: each compiled call boundary takes a reference
     to every array it receives and releases it on return (atomic reference counting,
     tens of arrays per control step), which inlining removes.
+
+    ``@compiled(nogil=True)`` releases the GIL while the function runs: for the loops
+    that run a chunk of control steps, so that the thread writing the recording (and any
+    other Python thread) runs beside them instead of waiting for the chunk to end.
     """
     if function is None:
-        return functools.partial(compiled, inline=inline)
+        return functools.partial(compiled, inline=inline, nogil=nogil)
     options: dict[str, Any] = {"error_model": "numpy"}
     if inline:
         options["inline"] = "always"
+    if nogil:
+        options["nogil"] = True
     dispatcher = njit(**options)(function)
     if isinstance(dispatcher, Dispatcher):  # a plain function under NUMBA_DISABLE_JIT
         try:

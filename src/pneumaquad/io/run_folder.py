@@ -119,12 +119,15 @@ class RunRecorder(StreamedTable):
         Run folder (created if missing).
     columns
         Column names, ``quantity [unit]`` in SI units.
+    background
+        Write the CSV blocks from a writer thread (see
+        :class:`~pneumaquad.io.tables.StreamedTable`).
     """
 
-    def __init__(self, folder: Path, columns: Sequence[str]) -> None:
+    def __init__(self, folder: Path, columns: Sequence[str], background: bool = False) -> None:
         self.folder = Path(folder)
         super().__init__(self.folder / CSV_NAME, self.folder / PARQUET_NAME, columns,
-                         metadata=self._provenance)
+                         metadata=self._provenance, background=background)
 
     def _provenance(self) -> dict[str, str]:
         """The Parquet file's metadata: ``pneumaquad version``, ``run folder format`` and,
@@ -263,9 +266,10 @@ class RunFolderWriter:
         np.savez(file, time=np.asarray(times), qpos=np.asarray(qpos))
         return file
 
-    def recorder(self, columns: Sequence[str]) -> RunRecorder:
-        """The streamed recording (``recording.csv`` live, ``recording.parquet`` on close)."""
-        return RunRecorder(self.path, columns)
+    def recorder(self, columns: Sequence[str], background: bool = False) -> RunRecorder:
+        """The streamed recording (``recording.csv`` live, ``recording.parquet`` on close;
+        ``background``: the CSV blocks written by a writer thread)."""
+        return RunRecorder(self.path, columns, background=background)
 
     @property
     def packets_path(self) -> Path:

@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import csv
 import io
+import queue
 import re
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -62,11 +64,18 @@ class StreamedTable:
     metadata
         File-level key/value text for the Parquet file, or a callable that returns it
         when the file is written (on close).
+    background
+        Format and write the CSV blocks in a writer thread, so that on a machine with a
+        free core the writing overlaps the computation of the next block (Arrow formats
+        and writes without holding the GIL). :meth:`append` then returns before its block
+        is in the file; :meth:`flush` waits for every block appended, and :meth:`close`
+        (also after Ctrl-C or an error) writes them all before the Parquet file. Without
+        it each block is in the file when :meth:`append` returns.
     """
 
     def __init__(self, csv_path: Path, parquet_path: Path, columns: Sequence[str],
                  metadata: Mapping[str, str] | Callable[[], Mapping[str, str]] | None = None,
-                 ) -> None:
+                 background: bool = False) -> None:
         self.metadata = metadata
         self.csv_path = Path(csv_path)
         self.parquet_path = Path(parquet_path)
@@ -82,11 +91,12 @@ class StreamedTable:
         self._schema = pa.schema([pa.field(name, pa.float64()) for name in self.columns])
         header = io.StringIO()
         csv.writer(header, lineterminator="\n").writerow(self.columns)
-        self._file: io.BufferedWriter | None = self.csv_path.open("wb")
+        # Arrow's own file: its writes go to the OS unbuffered and need no GIL.
+        self._file: pa.NativeFile | None = pa.OSFile(str(self.csv_path), "wb")
         self._file.write(header.getvalue().encode("utf-8"))
-        self._file.flush()
         self._csv_writer = pa_csv.CSVWriter(
             self._file, self._schema, write_options=pa_csv.WriteOptions(include_header=False))
+        self._writer = _WriterThread(self._write_block, self.csv_path) if background else None
 
     @property
     def rows_written(self) -> int:
@@ -121,8 +131,19 @@ class StreamedTable:
         by_column = data.T.copy()  # one contiguous array per column
         self._blocks.append(by_column)
         self._rows += data.shape[0]
+        if self._writer is not None:
+            self._writer.submit(by_column)
+        else:
+            self._write_block(by_column)
+
+    def flush(self) -> None:
+        """Return when every block appended so far is in the CSV file."""
+        if self._writer is not None:
+            self._writer.wait()
+
+    def _write_block(self, by_column: np.ndarray) -> None:
+        """Format one block (one array per column) into the CSV file."""
         self._csv_writer.write_table(pa.Table.from_arrays(list(by_column), schema=self._schema))
-        self._file.flush()
 
     def to_arrays(self) -> dict[str, np.ndarray]:
         """All rows appended so far, one float64 array per column."""
@@ -137,6 +158,10 @@ class StreamedTable:
         if self._closed:
             return
         self._closed = True
+        failure = None
+        if self._writer is not None:
+            failure = self._writer.stop()  # every block appended is written first
+            self._writer = None
         if self._file is not None:
             self._csv_writer.close()
             self._file.close()
@@ -153,6 +178,8 @@ class StreamedTable:
                          schema=schema)
         # Dictionary encoding buys nothing on float samples and costs most of the time.
         pq.write_table(table, self.parquet_path, use_dictionary=False)
+        if failure is not None:  # the Parquet file holds every row even then
+            raise OSError(f"writing {self.csv_path} failed: {failure}") from failure
 
     def __enter__(self) -> Self:
         return self
@@ -251,6 +278,48 @@ def read_table_metadata(path: Path) -> TableMetadata:
     split = {name: quantity_and_unit(name) for name in header}
     return TableMetadata({n: u for n, (_, u) in split.items()},
                          {n: q for n, (q, _) in split.items()}, {})
+
+
+class _WriterThread:
+    """A thread that hands queued blocks to ``write`` in order (:class:`StreamedTable`'s
+    ``background`` mode); the first error stops the writing and is kept for
+    :meth:`stop`."""
+
+    def __init__(self, write: Callable[[np.ndarray], None], path: Path) -> None:
+        self._write = write
+        self._queue: queue.Queue[np.ndarray | None] = queue.Queue()
+        self.error: BaseException | None = None
+        self._thread = threading.Thread(target=self._run, name=f"writer of {path.name}",
+                                        daemon=True)
+        self._thread.start()
+
+    def submit(self, block: np.ndarray) -> None:
+        if self.error is not None:
+            raise OSError(f"writing the table failed: {self.error}") from self.error
+        self._queue.put(block)
+
+    def wait(self) -> None:
+        """Return when every submitted block is written (or failed)."""
+        self._queue.join()
+
+    def stop(self) -> BaseException | None:
+        """Write what is queued, end the thread; the error that stopped it, if any."""
+        self._queue.put(None)
+        self._thread.join()
+        return self.error
+
+    def _run(self) -> None:
+        while True:
+            block = self._queue.get()
+            try:
+                if block is None:
+                    return
+                if self.error is None:
+                    self._write(block)
+            except BaseException as error:  # kept for the thread that appends
+                self.error = error
+            finally:
+                self._queue.task_done()
 
 
 class RowBuffer:

@@ -53,7 +53,7 @@ def run_rig_experiment(
         writer.write_parameters(setup)
     failure: RigDivergedError | None = None
     began = time.perf_counter()
-    recorder = writer.recorder(RIG_COLUMNS)
+    recorder = writer.recorder(RIG_COLUMNS, background=True)
     try:
         result = simulate_rig(setup, signal, closed_loop, recorder=recorder,
                               progress=progress, clock=clock)

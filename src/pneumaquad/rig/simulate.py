@@ -71,7 +71,7 @@ __all__ = [  # the recording's names are re-exported for the callers of this mod
 ]
 
 
-@compiled
+@compiled(nogil=True)
 def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
                   closed_loop: bool, signals: np.ndarray, start: int, count: int,
                   control_step: float, substeps: int, records: np.ndarray) -> None:

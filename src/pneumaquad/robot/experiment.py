@@ -157,7 +157,8 @@ def run_phases(
     failure: Exception | None = None
     stepping = feedback_seconds = reference_seconds = recording_seconds = 0.0
     chunks = 0
-    with writer.recorder(columns) as recorder, deferred_interrupt() as stop:
+    with writer.recorder(columns, background=True) as recorder, \
+            deferred_interrupt() as stop:
         rows_out = RowBuffer(recorder)
 
         def record(reference_angles: np.ndarray) -> None:

@@ -224,7 +224,7 @@ def bring_to_present(stepper: MujocoStepper, coupling) -> None:
         coupling[0].fresh = 1
 
 
-@compiled
+@compiled(nogil=True)
 def advance_chunk(stepper: MujocoStepper, step_count: int, reference_table,
                   reference_start: int, mujoco: MujocoBuffers, cylinders: Cylinders,
                   actuators: ActuatorArrays, controllers: Controllers, trace: StepTrace,
