@@ -22,6 +22,7 @@ Run: ``.venv/bin/python benchmarks/kernel_cost.py [--json out.json]``.
 from __future__ import annotations
 
 import argparse
+import re
 import tempfile
 import time
 from dataclasses import dataclass
@@ -274,6 +275,31 @@ def compile_cost(substeps: int) -> dict[str, dict[str, float]]:
     return results
 
 
+#: Packed double-precision arithmetic (x86 SSE/AVX/AVX-512): vaddpd, mulpd, vfmadd231pd …
+_PACKED = re.compile(r"\bv?(?:add|sub|mul|div|sqrt|max|min|fn?m(?:add|sub)\d*)pd\b")
+#: The scalar forms of the same operations: vaddsd, mulsd …
+_SCALAR = re.compile(r"\bv?(?:add|sub|mul|div|sqrt|max|min|fn?m(?:add|sub)\d*)sd\b")
+_LANES = {"xmm": 2, "ymm": 4, "zmm": 8}
+
+
+def simd_width() -> dict[str, int]:
+    """What the compiled ``step_actuators`` does with doubles, read from its machine code.
+
+    Counts the packed (several doubles per instruction) and scalar double arithmetic
+    instructions of the compiled kernel and the widest register a packed one uses:
+    ``{"packed": …, "scalar": …, "lanes": 1, 2, 4 or 8}`` (1 when nothing is packed).
+    """
+    assembly = "\n".join(step_actuators.inspect_asm().values())
+    packed_lines = [line for line in assembly.splitlines() if _PACKED.search(line)]
+    scalar = sum(1 for line in assembly.splitlines() if _SCALAR.search(line))
+    lanes = 1
+    for line in packed_lines:
+        for register, width in _LANES.items():
+            if register in line:
+                lanes = max(lanes, width)
+    return {"packed": len(packed_lines), "scalar": scalar, "lanes": lanes}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--counts", type=int, nargs="+", default=[1, 12, 1000])
@@ -376,6 +402,20 @@ def main() -> None:
             f"({best / TARGET_NS:.1f}x the target; fastest repeat "
             f"{figures[f'full/N={TARGET_COUNT}/compiled']['ns_per_actuator_step'].min:.0f} ns)"
         )
+
+    vector = simd_width()
+    figures["simd"] = vector
+    print(
+        f"\nSIMD of the compiled step_actuators: {vector['lanes']} double(s) per arithmetic "
+        f"instruction at most ({vector['packed']} packed, {vector['scalar']} scalar "
+        "instructions); the actuators' records are an array of structures and each "
+        "actuator's step branches on its valve and friction regime, so the loop over "
+        "actuators is not vectorised."
+    )
+    if 1000 in args.counts:
+        per = medians["full", 1000, "compiled"]
+        print(f"target (issue 14): <= 500 ns per actuator-step at N=1000 -> {per:.0f} ns: "
+              f"{'met' if per <= 500 else 'NOT met'}")
 
     full_row = pack_parameters(load_actuator("crr-gamma"))
     if args.sweep:

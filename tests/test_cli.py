@@ -290,3 +290,20 @@ def test_numeric_options_are_finite_and_bounded(tmp_path: Path, args, fragment: 
     assert result.exit_code == 2, result.output
     assert fragment in " ".join(result.output.replace("│", " ").split()), result.output
     assert not (tmp_path / "runs").exists()
+
+
+def test_profile_writes_where_the_wall_time_went(tmp_path: Path) -> None:
+    out = tmp_path / "profiled"
+    done = run_cli("rig", "track", "sine", "--duration", "0.5 s", "--profile", "--output",
+                   str(out), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "command real-time factor" in done.stderr
+    profile = json.loads((out / "profile.json").read_text())
+    stages = profile["stages"]
+    for stage in ("start-up", "simulation", "recording", "plot"):
+        assert stages[stage]["seconds"] > 0.0
+    timed = sum(entry["seconds"] for name, entry in stages.items() if ":" not in name)
+    assert timed + profile["untimed [s]"] == pytest.approx(profile["total [s]"])
+    assert profile["simulated time [s]"] == pytest.approx(0.5)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["real-time factor"] == pytest.approx(0.5 / summary["wall time [s]"])

@@ -176,3 +176,64 @@ def test_csv_tolerates_truncated_last_line_and_nan(tmp_path: Path) -> None:
     data = read_recording(tmp_path / "recording.csv")
     assert data["time [s]"].tolist() == [0.0, 1e-3]
     assert np.isnan(data["position [m]"][0]) and np.isinf(data["cap pressure [Pa]"][0])
+
+
+def test_background_writer_keeps_every_block_in_order(tmp_path: Path) -> None:
+    recorder = RunRecorder(tmp_path, COLUMNS, background=True)
+    for start in range(0, 200, 7):
+        recorder.append(_block(start, 7))
+    recorder.flush()  # every block appended so far is in the file now
+    with (tmp_path / "recording.csv").open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    np.testing.assert_array_equal(np.array(rows[1:], dtype=float), _block(0, 203))
+    recorder.close()
+    np.testing.assert_array_equal(read_recording(tmp_path / "recording.parquet")["time [s]"],
+                                  _block(0, 203)[:, 0])
+
+
+def test_background_writer_writes_everything_when_the_run_fails(tmp_path: Path) -> None:
+    with pytest.raises(KeyboardInterrupt), RunRecorder(tmp_path, COLUMNS,
+                                                       background=True) as recorder:
+        for start in range(0, 1000, 100):
+            recorder.append(_block(start, 100))
+        raise KeyboardInterrupt
+    for name in ("recording.csv", "recording.parquet"):
+        data = read_recording(tmp_path / name)
+        np.testing.assert_array_equal(data["position [m]"], _block(0, 1000)[:, 1])
+
+
+def test_csv_holds_special_values_exactly(tmp_path: Path) -> None:
+    values = np.array([[0.1, np.nan, -np.inf], [5e-324, 1.7976931348623157e308, -0.0],
+                       [1 / 3, np.pi * 1e-12, 123456789.123456789]])
+    with RunRecorder(tmp_path, COLUMNS) as recorder:
+        recorder.append(values)
+    data = read_recording(tmp_path / "recording.csv")
+    np.testing.assert_array_equal(np.column_stack([data[name] for name in COLUMNS]), values)
+
+
+def test_row_buffer_writes_full_blocks_and_the_rest_on_flush(tmp_path: Path) -> None:
+    from pneumaquad.io.tables import RowBuffer
+
+    recorder = RunRecorder(tmp_path, COLUMNS)
+    rows = RowBuffer(recorder, block_rows=4, max_delay=3600.0)
+    expected = _block(0, 10)
+    for index in range(10):
+        rows.row()[:] = expected[index]
+        rows.commit()
+        assert recorder.rows_written == 4 * ((index + 1) // 4)  # whole blocks only
+    rows.flush()
+    assert recorder.rows_written == 10
+    recorder.close()
+    np.testing.assert_array_equal(read_recording(tmp_path)["cap pressure [Pa]"], expected[:, 2])
+
+
+def test_row_buffer_writes_a_row_that_waited_too_long(tmp_path: Path) -> None:
+    from pneumaquad.io.tables import RowBuffer
+
+    with RunRecorder(tmp_path, COLUMNS) as recorder:
+        rows = RowBuffer(recorder, block_rows=1000, max_delay=0.0)
+        rows.row()[:] = _block(0, 1)[0]
+        rows.commit()
+        rows.row()[:] = _block(1, 1)[0]
+        rows.commit()  # the first row has waited longer than max_delay: both go out
+        assert recorder.rows_written == 2
