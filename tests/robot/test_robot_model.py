@@ -370,3 +370,78 @@ def test_joint_range_beyond_half_a_turn_is_rejected():
     with pytest.raises(ParameterError) as caught:
         load_robot("crr-quadruped", ['leg.gamma.upper_limit="200 deg"'])
     assert "leg.gamma.upper_limit" in [p.key for p in caught.value.problems]
+
+
+# --- 8. MuJoCo options ------------------------------------------------------------------
+def test_shipped_mujoco_options_reach_the_model(quadruped):
+    opt = quadruped.model.opt
+    assert opt.solver == mujoco.mjtSolver.mjSOL_NEWTON
+    assert opt.iterations == 50
+    assert opt.tolerance == 1e-8
+    assert opt.noslip_iterations == 0
+    assert opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    assert opt.impratio == 10.0
+    assert opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    assert opt.disableflags & mujoco.mjtDisableBit.mjDSBL_AUTORESET
+    # the shipped file turns MuJoCo's island discovery off (docs/benchmarks.md)
+    assert opt.disableflags & mujoco.mjtDisableBit.mjDSBL_ISLAND
+
+
+@pytest.mark.parametrize(
+    ("override", "option", "expected"),
+    [
+        ("simulation.solver=cg", "solver", mujoco.mjtSolver.mjSOL_CG),
+        ("simulation.solver=pgs", "solver", mujoco.mjtSolver.mjSOL_PGS),
+        ("simulation.solver_iterations=7", "iterations", 7),
+        ("simulation.solver_tolerance=1e-5", "tolerance", 1e-5),
+        ("simulation.noslip_iterations=3", "noslip_iterations", 3),
+        ("contact.friction_cone=pyramidal", "cone", mujoco.mjtCone.mjCONE_PYRAMIDAL),
+        ("contact.friction_impedance_ratio=2.5", "impratio", 2.5),
+        ("simulation.integrator=euler", "integrator", mujoco.mjtIntegrator.mjINT_EULER),
+    ],
+)
+def test_mujoco_option_overrides_reach_the_model_and_its_export(override, option, expected):
+    robot = build_robot(load_robot("crr-quadruped", [override]), "fixed")
+    again = mujoco.MjModel.from_xml_string(robot.to_xml())
+    assert getattr(robot.model.opt, option) == expected
+    assert getattr(again.opt, option) == expected
+
+
+@pytest.mark.parametrize("islands", [True, False])
+def test_constraint_islands_set_mujocos_island_flag(islands):
+    robot = build_robot(
+        load_robot("crr-quadruped", [f"simulation.constraint_islands={str(islands).lower()}"]),
+        "fixed")
+    island = mujoco.mjtDisableBit.mjDSBL_ISLAND
+    for model in (robot.model, mujoco.MjModel.from_xml_string(robot.to_xml())):
+        assert bool(model.opt.disableflags & island) is not islands
+        assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_AUTORESET
+
+
+@pytest.mark.parametrize(
+    ("override", "key"),
+    [
+        ("simulation.solver=newtonian", "simulation.solver"),
+        ("simulation.solver_tolerance=-1e-3", "simulation.solver_tolerance"),
+        ("contact.friction_cone=round", "contact.friction_cone"),
+        ("simulation.constraint_islands=0", "simulation.constraint_islands"),
+    ],
+)
+def test_mujoco_option_out_of_range_is_reported_with_its_key(override, key):
+    with pytest.raises(ParameterError) as caught:
+        load_robot("crr-quadruped", [override])
+    assert [p.key for p in caught.value.problems] == [key]
+
+
+def test_piston_mass_on_the_joint_is_its_mean_reflected_inertia(params):
+    robot = build_robot(load_robot("crr-quadruped", ["simulation.piston_inertia=joint"]), "fixed")
+    model = robot.model
+    assert np.all(model.tendon_armature == 0.0)
+    for i, joint_type in enumerate(robot.joint_types):
+        linkage, joint = robot.linkages[joint_type], getattr(params.leg, joint_type)
+        theta = np.linspace(joint.lower_limit, joint.upper_limit, 20001)
+        lengths = np.array([_law_of_cosines(linkage, t)[0] for t in theta])
+        arm = np.gradient(lengths, theta)  # dx/dθ: the moment arm of eq 5.2.7-5.2.9
+        mean_square = np.trapezoid(arm**2, theta) / (theta[-1] - theta[0])
+        expected = params.linkages[joint_type].moving_mass * mean_square
+        assert model.dof_armature[robot.dof_address[i]] == pytest.approx(expected, rel=1e-5)

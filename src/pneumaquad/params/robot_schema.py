@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
-from pydantic import StrictInt
+from pydantic import StrictBool, StrictInt
 from pydantic import model_validator as _model_validator
 
 from .schema import (
@@ -238,6 +238,10 @@ class ContactParameters(_Model):
     #: MuJoCo ``impratio``: impedance of the friction rows relative to the normal ones
     #: (elliptic cones); above 1 a loaded contact creeps less under tangential force.
     friction_impedance_ratio: Annotated[Number, Bounds(1.0, 1000.0, lower_inclusive=True)] = 1.0
+    #: MuJoCo ``cone``: the friction cone of every contact. ``"elliptic"`` (one row per
+    #: friction direction, exact Coulomb cone); ``"pyramidal"`` (MuJoCo's default: two rows
+    #: per direction, a polygonal approximation of the cone).
+    friction_cone: Literal["elliptic", "pyramidal"] = "elliptic"
 
 
 class EnvironmentParameters(_Model):
@@ -282,6 +286,19 @@ class RobotSimulationParameters(_Model):
     step. ``seal_friction`` chooses where cylinder friction lives: ``"mujoco"`` (dry
     friction in the constraint solver, Stribeck breakaway updated each step) or
     ``"actuator"`` (the actuator file's force law, applied through the motor).
+
+    MuJoCo's constraint solver: ``solver`` (MuJoCo ``solver``: Newton, conjugate gradient
+    or projected Gauss-Seidel), at most ``solver_iterations`` iterations per step
+    (``iterations``), stopping early once the relative cost improvement falls below
+    ``solver_tolerance`` (``tolerance``, dimensionless; 0 runs every iteration);
+    ``noslip_iterations`` of MuJoCo's no-slip post-processing (0: off).
+    ``constraint_islands``: MuJoCo's island discovery (the constraint rows split into
+    independent groups solved one by one; false sets the ``island`` disable flag).
+    ``piston_inertia``: where MuJoCo holds each cylinder's moving piston/rod mass m:
+    ``"tendon"``, the cylinder tendon's armature (exact, m·ẋ² follows the moment arm;
+    MuJoCo computes the tendon's velocity-product force every step), or ``"joint"``, the
+    hinge's armature m·⟨r²⟩ with ⟨r²⟩ the mean squared moment arm over the joint's range
+    (a constant reflected inertia, cheaper).
     """
 
     control_step: ControlStep
@@ -290,7 +307,11 @@ class RobotSimulationParameters(_Model):
     integrator: Literal["implicitfast", "implicit", "euler", "rk4"] = "implicitfast"
     seal_friction: Literal["mujoco", "actuator"] = "mujoco"
     noslip_iterations: Annotated[StrictInt, Bounds(0, 1000, lower_inclusive=True)] = 0
+    solver: Literal["newton", "cg", "pgs"] = "newton"
     solver_iterations: Annotated[StrictInt, Bounds(1, 10000, lower_inclusive=True)] = 50
+    solver_tolerance: Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True)] = 1e-8
+    constraint_islands: StrictBool = True
+    piston_inertia: Literal["tendon", "joint"] = "tendon"
     recording_every: Annotated[StrictInt, Bounds(1, 1_000_000, lower_inclusive=True)] = 10
 
 

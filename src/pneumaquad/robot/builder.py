@@ -6,8 +6,9 @@ listing in one body. Each joint is driven by its cylinder: a two-site spatial te
 between the barrel pivot on the parent link and the rod-end pin on the child link, whose
 length is the pin-to-pin distance of eq 5.2.1-5.2.6, with a ``motor`` actuator applying
 the cylinder force along it (torque = force × exact moment arm, eq 5.2.7-5.2.9). The
-tendon's armature is the moving piston/rod mass; its ``frictionloss`` and ``damping``
-hold the seal friction when it lives in MuJoCo's constraint solver.
+tendon's armature is the moving piston/rod mass (or, with ``simulation.piston_inertia =
+"joint"``, the hinge's armature its mean reflected inertia); its ``frictionloss`` and
+``damping`` hold the seal friction when it lives in MuJoCo's constraint solver.
 
 Configurations (thesis 5.4, 3.1.2):
 
@@ -31,7 +32,7 @@ from pneumaquad.params.robot_schema import Frame, LinkParameters, RobotParameter
 
 from .environment import WORLD_CONAFFINITY, WORLD_CONTYPE, add_environment
 from .frames import frame_matrix, invert, rotation_to_quaternion
-from .linkage import Linkage, design_linkage
+from .linkage import Linkage, design_linkage, moment_arm
 
 __all__ = ["CONFIGURATIONS", "RobotModel", "build_robot", "leg_linkages", "tibia_body_legs"]
 
@@ -257,6 +258,8 @@ def _add_cylinder(
     moving_mass: float,
     actuator: ActuatorParameters,
 ) -> None:
+    """The cylinder's tendon (armature ``moving_mass`` [kg], 0 when the mass is held by
+    the joint) and its force motor."""
     tendon = spec.add_tendon(name=f"{prefix}_cylinder")
     tendon.wrap_site(sites[0])
     tendon.wrap_site(sites[1])
@@ -343,14 +346,27 @@ def _add_leg(
             linkage,
             p.linkages[joint_name].axial_offset,
         )
-        _add_cylinder(
-            spec, f"{leg}_{joint_name}", sites, p.linkages[joint_name].moving_mass,
-            actuators[joint_name],
-        )
+        moving_mass = p.linkages[joint_name].moving_mass
+        if p.simulation.piston_inertia == "joint":
+            hinge.armature = moving_mass * _mean_squared_moment_arm(
+                linkage, joint.lower_limit, joint.upper_limit)
+            moving_mass = 0.0
+        _add_cylinder(spec, f"{leg}_{joint_name}", sites, moving_mass, actuators[joint_name])
         bodies[link_name] = body
         parent = body
     tip = -(p.tibia.length / 2 + p.tibia.diameter / 2)
     bodies["tibia"].add_site(name=f"{leg}_foot", pos=[0.0, 0.0, tip], size=[0.01, 0, 0])
+
+
+def _mean_squared_moment_arm(linkage: Linkage, lower: float, upper: float) -> float:
+    """Mean of the squared moment arm r(θ)² [m²] over the joint range [lower, upper]
+    [rad] (Simpson's rule on 64 intervals): with the piston mass m [kg], m·⟨r²⟩ [kg m²] is
+    the joint armature of ``simulation.piston_inertia = "joint"``."""
+    angles = np.linspace(lower, upper, 65)
+    squared = np.asarray(moment_arm(linkage, angles)) ** 2
+    weights = np.ones(65)
+    weights[1:-1:2], weights[2:-1:2] = 4.0, 2.0
+    return float(weights @ squared / (3.0 * 64))
 
 
 def _add_testbed_wheels(spec: mujoco.MjSpec, thorax: mujoco.MjsBody, p: RobotParameters) -> None:
@@ -437,15 +453,19 @@ def build_robot(
     spec.option.integrator = getattr(
         mujoco.mjtIntegrator, f"mjINT_{p.simulation.integrator.upper()}"
     )
+    spec.option.solver = getattr(mujoco.mjtSolver, f"mjSOL_{p.simulation.solver.upper()}")
     spec.option.iterations = p.simulation.solver_iterations
+    spec.option.tolerance = p.simulation.solver_tolerance
     spec.option.noslip_iterations = p.simulation.noslip_iterations
-    # Elliptic friction cones: with the pyramidal default and ground friction 5 the feet
-    # sank about 2 cm into the ground; elliptic cones keep it near 0.15 mm.
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    # Elliptic friction cones by default: with the pyramidal cone and ground friction 5 the
+    # feet sank about 2 cm into the ground; elliptic cones keep it near 0.15 mm.
+    spec.option.cone = getattr(mujoco.mjtCone, f"mjCONE_{p.contact.friction_cone.upper()}")
     spec.option.impratio = p.contact.friction_impedance_ratio
     # A diverging state stops the run with an error (robot.simulation) instead of
     # MuJoCo's silent reset to the initial state, which would make time jump back.
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
+    if not p.simulation.constraint_islands:
+        spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_ISLAND
     spec.compiler.degree = False
     _add_visual_assets(spec)
     add_environment(spec, environment, p.environment, p.contact, seed)
