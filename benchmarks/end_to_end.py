@@ -74,10 +74,14 @@ def time_rig_in_process(repeats: int, duration: float) -> tuple[Stats, Stats]:
     return stats(kernel), stats(run)
 
 
+#: "--profile", or nothing to time a version of the code that does not have the option
+PROFILE: list[str] = ["--profile"]
+
+
 def run_command(arguments: list[str], folder: Path) -> dict[str, Any]:
     """Run a pneumaquad command in a fresh process; its wall time and run folder files."""
     begun = time.perf_counter()
-    done = subprocess.run([*COMMAND, *arguments, "--output", str(folder)],
+    done = subprocess.run([*COMMAND, *arguments, *PROFILE, "--output", str(folder)],
                           capture_output=True, text=True, check=False)
     wall = time.perf_counter() - begun
     if done.returncode != 0:
@@ -118,14 +122,18 @@ def main() -> None:
     parser.add_argument("--short-distance", type=float, default=0.3, help="(c), (d) [m]")
     parser.add_argument("--video", action="store_true", help="also measure (d)")
     parser.add_argument("--skip-walk", action="store_true", help="only (a)")
+    parser.add_argument("--no-profile", action="store_true",
+                        help="run the commands without --profile (code before the option)")
     parser.add_argument("--json", default=None, help="write the figures to this file")
     args = parser.parse_args()
+    if args.no_profile:
+        PROFILE.clear()
     print(f"end-to-end speed  ({machine_line()})\n")
     figures: dict[str, Any] = {}
 
     kernel, run = time_rig_in_process(max(args.repeats, 5), 10.0)
     with tempfile.TemporaryDirectory(prefix="e2e-cmd-") as folder:
-        commands = [run_command(["rig", "track", "sine", "--profile"], Path(folder) / f"{i}")
+        commands = [run_command(["rig", "track", "sine"], Path(folder) / f"{i}")
                     for i in range(args.repeats)]
     fresh_run = stats([c["run [s]"] for c in commands])
     process = stats([c["process [s]"] for c in commands])
@@ -152,7 +160,7 @@ def main() -> None:
 
     with tempfile.TemporaryDirectory(prefix="e2e-walk-") as folder:
         walks = [run_command(["robot", "walk", "--distance", f"{args.walk_distance:g}",
-                              "--no-video", "--profile"], Path(folder) / f"{i}")
+                              "--no-video"], Path(folder) / f"{i}")
                  for i in range(args.repeats)]
     simulated = walks[0]["simulated [s]"]
     walk_run = stats([w["run [s]"] for w in walks])

@@ -23,7 +23,7 @@ stepping loop on the first call), it measures:
   the same contacts, pose and seal-friction constraints), and the pneumatic overhead
   (full - bare) / bare. Without a controller the constant forces slowly extend the legs
   (the thorax rises a few cm over the 5 s), but the constraint rows stay the same (four
-  pyramidal foot contacts and 12 tendon friction rows);
+  elliptic foot contacts and 12 tendon friction rows);
 * a **breakdown** per control step, each part timed alone in its own loop on the same
   12 rows: the pneumatic kernel as the robot runs it
   (``pneumaquad.core.kernel.advance_actuators`` without the friction output, from a

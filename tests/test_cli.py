@@ -307,3 +307,13 @@ def test_profile_writes_where_the_wall_time_went(tmp_path: Path) -> None:
     assert profile["simulated time [s]"] == pytest.approx(0.5)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["real-time factor"] == pytest.approx(0.5 / summary["wall time [s]"])
+
+
+@pytest.mark.parametrize("name", ["thesis-rig", "crr-gamma", "crr-quadruped"])
+def test_params_show_and_check_every_kind_of_set(tmp_path: Path, name: str) -> None:
+    shown = run_cli("params", "show", name, cwd=tmp_path)
+    assert shown.returncode == 0, shown.stderr
+    resolved = tmp_path / f"{name}.toml"
+    resolved.write_text(shown.stdout)
+    checked = run_cli("params", "check", str(resolved), cwd=tmp_path)
+    assert checked.returncode == 0, checked.stderr

@@ -37,7 +37,7 @@ from pneumaquad.params import (
     load_rig,
     resolved_parameters_toml,
 )
-from pneumaquad.params.loader import load_actuator
+from pneumaquad.params.loader import load_parameter_set
 from pneumaquad.params.schema import Bounds, RigSetup
 from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals
@@ -76,24 +76,16 @@ def params_show(
     name: Annotated[str, typer.Argument(help="Set name or TOML path.")], overrides: SetOption = None
 ) -> None:
     """Print a parameter set resolved to SI (loadable again with --params)."""
-    try:
-        setup = load_rig(name, overrides or [])
-    except ParameterError as rig_error:
-        if not any(
-            problem.key.split(".")[0] in ("rig", "controller", "simulation")
-            for problem in rig_error.problems
-        ):
-            raise
-        setup = load_actuator(name, overrides or [])
-    sys.stdout.write(resolved_parameters_toml(setup))
+    sys.stdout.write(resolved_parameters_toml(load_parameter_set(name, overrides or [])))
 
 
 @params_app.command("check")
 def params_check(
     name: Annotated[str, typer.Argument(help="Set name or TOML path.")], overrides: SetOption = None
 ) -> None:
-    """Validate a parameter file; exit 2 with the problems if it is not valid."""
-    load_rig(name, overrides or [])
+    """Validate a parameter file (rig, actuator or robot); exit 2 with the problems if it is
+    not valid."""
+    load_parameter_set(name, overrides or [])
     console.print(f"{name}: valid")
 
 

@@ -26,6 +26,7 @@ __all__ = [
     "apply_overrides",
     "list_parameter_sets",
     "load_actuator",
+    "load_parameter_set",
     "load_rig",
     "load_robot",
     "resolved_parameters_toml",
@@ -379,6 +380,26 @@ def load_robot(
     """
     raw, source = _load_raw(name_or_path, overrides)
     return _validate(RobotParameters, raw, raw, source)
+
+
+def load_parameter_set(
+    name_or_path: str | os.PathLike[str], overrides: Iterable[str] = ()
+) -> RigSetup | ActuatorParameters | RobotParameters:
+    """Load a parameter file of any kind, told by its tables: a robot file (``[leg]`` and
+    ``[actuators]``: :func:`load_robot`), a rig file (``[rig]``: :func:`load_rig`) or an
+    actuator file (:func:`load_actuator`).
+
+    Raises
+    ------
+    ParameterError
+        Listing every problem found, against the kind of file it is.
+    """
+    raw, _ = _load_raw(name_or_path, ())
+    if "leg" in raw and "actuators" in raw:
+        return load_robot(name_or_path, overrides)
+    if "rig" in raw:
+        return load_rig(name_or_path, overrides)
+    return load_actuator(name_or_path, overrides)
 
 
 def _quantity(annotation: Any, metadata: Iterable[Any] = ()) -> QuantityField | None:
