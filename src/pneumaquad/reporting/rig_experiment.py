@@ -52,7 +52,6 @@ def run_rig_experiment(
     with clock.stage("run folder"):
         writer.write_parameters(setup)
     failure: RigDivergedError | None = None
-    began = time.perf_counter()
     recorder = writer.recorder(RIG_COLUMNS, background=True)
     try:
         result = simulate_rig(setup, signal, closed_loop, recorder=recorder,
@@ -62,8 +61,9 @@ def run_rig_experiment(
     finally:
         closing = time.perf_counter()
         recorder.close()
-        clock.add("recording", time.perf_counter() - closing)
-    run_wall = time.perf_counter() - began
+        closed = time.perf_counter() - closing
+        clock.add("recording", closed)
+    run_wall = result.wall_time + closed  # from the first step to the recording written
     recording = result.recording
     simulated = float(recording["time [s]"][-1]) if recording["time [s]"].size else 0.0
     summary: dict[str, Any] = {
