@@ -1,15 +1,21 @@
 """Command-line interface of the robot: ``pneumaquad leg ...``, ``robot ...``, ``video``.
 
 Every experiment writes a run folder (see :mod:`pneumaquad.robot.experiment`), prints
-its key figures, and optionally renders a video offscreen.
+its key figures, and optionally renders a video offscreen. The video is rendered by a
+separate process (:mod:`pneumaquad.robot.video_worker`) started with the command: fed the
+recorded samples while the run goes where the run takes an ``on_sample`` hook, else given
+``trajectory.npz`` when the run ends; either way it works beside the plots and the command
+waits for it at the end. Without a video the worker writes only ``first-frame.png``.
 """
 
 from __future__ import annotations
 
+import contextlib
+import inspect
 import math
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -28,6 +34,13 @@ from pneumaquad.locomotion.walk_run import WALK_SETTINGS
 from pneumaquad.locomotion.walking import WalkSettings
 from pneumaquad.params import JOINT_NAMES, load_robot
 from pneumaquad.params.schema import Bounds
+from pneumaquad.robot.video import (
+    DEFAULT_VIDEO_QUALITY,
+    VIDEO_QUALITIES,
+    RenderingUnavailableError,
+    VideoError,
+)
+from pneumaquad.robot.video_worker import VideoSettings, VideoWorker, VideoWorkerError
 
 leg_app = typer.Typer(
     help="The front-right leg on a fixed thorax (thesis 5.5.2 validation set-up).",
@@ -49,8 +62,29 @@ def _within(lower: float, upper: float,
             unit: str = "") -> Callable[[float | int | None], float | int | None]:
     """Typer callback: a finite number within [lower, upper] (see :class:`Bounds`)."""
     return option_range(Bounds(lower, upper, unit, lower_inclusive=True))
+
+
+def _check_video_quality(quality: str) -> str:
+    """Typer callback: one of :data:`~pneumaquad.robot.video.VIDEO_QUALITIES`."""
+    if quality not in VIDEO_QUALITIES:
+        raise typer.BadParameter(f"{quality!r}: expected {' or '.join(VIDEO_QUALITIES)}")
+    return quality
+
+
+#: Default video frame rate [frames/s].
+VIDEO_FPS = 30.0
 VideoOption = Annotated[
-    bool, typer.Option("--video/--no-video", help="Render video.mp4, a GIF and first-frame.png.")
+    bool, typer.Option("--video/--no-video", help="Render video.mp4, a GIF and first-frame.png "
+                       "(in a separate process, beside the run and the plots).")
+]
+VideoFpsOption = Annotated[
+    float, typer.Option("--video-fps", help="Video frame rate, 1 to 240 frames/s.",
+                        callback=_within(1.0, 240.0, "frames/s"))
+]
+VideoQualityOption = Annotated[
+    str, typer.Option("--video-quality", help="fast: no shadows, reflections or "
+                      "multisampling (about a tenth of the cost of a frame on software "
+                      "OpenGL); full: the model's own look.", callback=_check_video_quality)
 ]
 
 
@@ -68,21 +102,66 @@ def _progress(update: Callable[[int, int], None]) -> Callable[[float, float], No
     return lambda done, total: update(int(done * 1000), int(total * 1000))
 
 
+def _start_video(video: bool, fps: float, quality: str) -> VideoWorker | None:
+    """The command's video worker, started first so that it is ready (OpenGL chosen, MuJoCo
+    loaded) when the run begins; without ``video`` it renders only first-frame.png. None,
+    with a yellow warning, if it cannot start."""
+    try:
+        return VideoWorker(VideoSettings(fps=fps, quality=quality, gif=video))
+    except OSError as error:
+        what = "video" if video else "first-frame.png"
+        console.print(f"[yellow]no {what}: cannot start the video worker: {error}[/yellow]")
+        return None
+
+
+def _sample_hook(run_function: Callable[..., Any], worker: VideoWorker | None, video: bool,
+                 simulation) -> dict[str, Any]:
+    """``on_sample=worker.add_sample`` for a video and a run function that takes that hook,
+    after sending the model: the worker renders while the run goes. Otherwise nothing: the
+    worker renders ``trajectory.npz`` once the run has ended."""
+    if not video or worker is None:
+        return {}
+    if "on_sample" not in inspect.signature(run_function).parameters:
+        return {}
+    worker.send_model(simulation.robot.to_xml())
+    return {"on_sample": worker.add_sample}
+
+
 def _run(simulation, phases, folder_option: Path | None, kind: str, description: str,
-         video: bool, joints: list[str] | None = None) -> Path:
+         worker: VideoWorker | None, video: bool, joints: list[str] | None = None) -> Path:
     from pneumaquad.io.run_folder import create_run_folder
     from pneumaquad.robot.experiment import run_phases
 
     folder = create_run_folder(folder_option, kind)
     with progress_bar(kind) as update:
-        run = run_phases(simulation, phases, folder, description, _progress(update))
-    _report(simulation, run, description, video, joints)
+        run = run_phases(simulation, phases, folder, description, _progress(update),
+                         **_sample_hook(run_phases, worker, video, simulation))
+    _report(simulation, run, description, worker, video, joints)
     return folder
 
 
-def _report(simulation, run, description: str, video: bool,
+def _report(simulation, run, description: str, worker: VideoWorker | None, video: bool,
             joints: list[str] | None = None) -> None:
-    """Plots, video and key figures of a finished robot run; exit 130 if interrupted."""
+    """Plots, video and key figures of a finished robot run; exit 130 if interrupted.
+
+    ``worker`` (:func:`_start_video`) renders the video, or only first-frame.png without
+    ``video``. It is told that the run has ended first, works while the plots are drawn,
+    and is waited for at the end (a progress bar; a yellow warning if it fails; Ctrl-C
+    cancels it and exits with 130, the run folder complete).
+    """
+    folder = run.folder
+    if worker is not None:
+        worker.finish(folder, first_frame_only=not video)
+    _report_figures(simulation, run, description, joints)
+    waited = _wait_for_video(worker, folder, first_frame_only=not video)
+    if run.summary.get("interrupted"):
+        finish_run(folder, run.summary)
+    if not waited:
+        raise typer.Exit(130)
+
+
+def _report_figures(simulation, run, description: str, joints: list[str] | None) -> None:
+    """Plots and key figures of a finished robot run."""
     from pneumaquad.reporting.robot_plots import plot_body, plot_joints
 
     folder = run.folder
@@ -92,10 +171,6 @@ def _report(simulation, run, description: str, video: bool,
         plot_joints(run.recording, leg_joints, folder / "joints.png", description)
         if robot.free:
             plot_body(run.recording, robot.legs, folder / "body.png", description)
-    if video:
-        _render(folder)
-    else:
-        _first_frame(folder)
     summary = dict(run.summary)
     console.print(f"run folder: [bold]{folder}[/bold]")
     for key in ("simulated time [s]", "wall time [s]", "real-time factor", "air consumed [NL]",
@@ -112,8 +187,6 @@ def _report(simulation, run, description: str, video: bool,
         if joint in leg_joints:
             console.print(f"  {joint} angle rmse [deg]: {error:.3g}", markup=False,
                           highlight=False)
-    if summary.get("interrupted"):
-        finish_run(folder, summary)
 
 
 def _check_environment(environment: str) -> None:
@@ -124,24 +197,31 @@ def _check_environment(environment: str) -> None:
                                  param_hint="--environment")
 
 
-def _first_frame(folder: Path) -> None:
-    from pneumaquad.robot.video import RenderingUnavailableError, render_first_frame
+def _wait_for_video(worker: VideoWorker | None, folder: Path,
+                    first_frame_only: bool = False) -> bool:
+    """Wait for the worker with a progress bar and print its video; False after Ctrl-C.
 
+    A worker that fails leaves a yellow warning (the run folder is complete without it).
+    """
+    what = "first-frame.png" if first_frame_only else "video"
+    if worker is None:
+        return True
     try:
-        render_first_frame(folder)
-    except RenderingUnavailableError as error:
-        console.print(f"[yellow]no first-frame.png: {error}[/yellow]")
-
-
-def _render(folder: Path, fps: int = 30, width: int = 640, height: int = 480) -> None:
-    from pneumaquad.robot.video import RenderingUnavailableError, render_run_video
-
-    try:
-        files = render_run_video(folder, fps=fps, width=width, height=height)
-    except RenderingUnavailableError as error:
-        console.print(f"[yellow]no video: {error}[/yellow]")
-        return
-    console.print(f"video: {files.mp4}")
+        if first_frame_only:
+            worker.wait()
+            return True
+        with progress_bar("video frames") as update:
+            rendered = worker.wait(update)
+    except KeyboardInterrupt:
+        hint = "" if first_frame_only else f"; `pneumaquad video {folder}` renders it"
+        console.print(f"[yellow]no {what}: interrupted{hint}[/yellow]")
+        return False
+    except (RenderingUnavailableError, VideoError, VideoWorkerError) as error:
+        console.print(f"[yellow]no {what}: {error}[/yellow]")
+        return True
+    console.print(f"video: {rendered.mp4} ({rendered.frames} frames at "
+                  f"{worker.settings.fps:g} frames/s, {worker.settings.quality} quality)")
+    return True
 
 
 @leg_app.command("validate")
@@ -159,6 +239,8 @@ def leg_validate(
     overrides: SetOption = None,
     output: OutputOption = None,
     video: VideoOption = False,
+    video_fps: VideoFpsOption = VIDEO_FPS,
+    video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
 ) -> None:
     """Thesis 5.5.2: one joint of the front-right leg follows a test signal.
 
@@ -180,11 +262,13 @@ def leg_validate(
     base = create_run_folder(output, f"leg-{joint}-{signal}") if several else output
     for tested in joints:
         for kind in signals:
-            simulation = _simulation(params, overrides, "fixed")
-            phases = leg_validation_phases(simulation, tested, kind, settle)
-            folder = base / f"{tested}-{kind}" if several else output
-            _run(simulation, phases, folder, f"leg-{tested}-{kind}",
-                 f"front-right {tested}: {kind}", video)
+            worker = _start_video(video, video_fps, video_quality)
+            with worker or contextlib.nullcontext():
+                simulation = _simulation(params, overrides, "fixed")
+                phases = leg_validation_phases(simulation, tested, kind, settle)
+                folder = base / f"{tested}-{kind}" if several else output
+                _run(simulation, phases, folder, f"leg-{tested}-{kind}",
+                     f"front-right {tested}: {kind}", worker, video)
 
 
 @leg_app.command("foot-cycle")
@@ -200,6 +284,8 @@ def leg_foot_cycle(
     overrides: SetOption = None,
     output: OutputOption = None,
     video: VideoOption = False,
+    video_fps: VideoFpsOption = VIDEO_FPS,
+    video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
 ) -> None:
     """Thesis 5.5.2.4: the walking-like foot cycle of the front-right leg through IK."""
     from pneumaquad.robot.scenarios import FOOT_CYCLE_PERIODS, foot_cycle_phases
@@ -209,10 +295,11 @@ def leg_foot_cycle(
         raise typer.BadParameter(f"{rate!r}: expected slow, medium, fast or all",
                                  param_hint="--rate")
     settings = [*(overrides or []), f"controller.alpha.gain_scale={alpha_gain_scale!r}"]
-    simulation = _simulation(params, settings, "fixed")
-    phases = foot_cycle_phases(simulation, rates, cycles)
-    _run(simulation, phases, output, f"foot-cycle-{rate}",
-         f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", video)
+    with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
+        simulation = _simulation(params, settings, "fixed")
+        phases = foot_cycle_phases(simulation, rates, cycles)
+        _run(simulation, phases, output, f"foot-cycle-{rate}",
+             f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", worker, video)
 
 
 @robot_app.command("stand")
@@ -232,6 +319,8 @@ def robot_stand(
     overrides: SetOption = None,
     output: OutputOption = None,
     video: VideoOption = True,
+    video_fps: VideoFpsOption = VIDEO_FPS,
+    video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
 ) -> None:
     """The quadruped stands up from lying on the ground, holds, follows body commands."""
     from pneumaquad.robot.scenarios import stand_up_phases
@@ -242,10 +331,11 @@ def robot_stand(
         raise typer.BadParameter(f"{configuration!r}: expected quadruped or testbed",
                                  param_hint="--configuration")
     _check_environment(environment)
-    simulation = _simulation(params, overrides, configuration, environment, seed, supply)
-    phases = stand_up_phases(simulation, hold=hold, posture=posture)
-    _run(simulation, phases, output, f"{configuration}-stand",
-         f"{configuration}: stand up and hold", video)
+    with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
+        simulation = _simulation(params, overrides, configuration, environment, seed, supply)
+        phases = stand_up_phases(simulation, hold=hold, posture=posture)
+        _run(simulation, phases, output, f"{configuration}-stand",
+             f"{configuration}: stand up and hold", worker, video)
 
 
 @robot_app.command("walk")
@@ -258,6 +348,8 @@ def robot_walk(
     overrides: SetOption = None,
     output: OutputOption = None,
     video: VideoOption = True,
+    video_fps: VideoFpsOption = VIDEO_FPS,
+    video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
 ) -> None:
     """The quadruped stands up and walks a statically stable crawl (lateral-sequence wave
     gait, duty factor >= 0.75); reports success or failure with the reason."""
@@ -269,15 +361,17 @@ def robot_walk(
         raise typer.BadParameter(
             f"walking {distance:g} m at {speed:g} m/s takes {distance / speed:.4g} s; expected "
             f"at most {MAX_SIMULATED_TIME:g} s of walking", param_hint="--distance / --speed")
-    simulation = _simulation(params, overrides, "quadruped", environment, seed)
-    kind = f"walk-{environment}"
-    try:
-        with progress_bar(kind) as update:
-            walk = run_walk(simulation, settings, output, progress=_progress(update))
-    except WalkSettingsError as error:  # out of range, or a gait that cannot be planned
-        raise typer.BadParameter(str(error), param_hint=option_names(WALK_SETTINGS,
-                                                                     error.fields)) from None
-    _report(simulation, walk.run, walk.run.summary["description"], video)
+    with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
+        simulation = _simulation(params, overrides, "quadruped", environment, seed)
+        kind = f"walk-{environment}"
+        try:
+            with progress_bar(kind) as update:
+                walk = run_walk(simulation, settings, output, progress=_progress(update),
+                                **_sample_hook(run_walk, worker, video, simulation))
+        except WalkSettingsError as error:  # out of range, or a gait that cannot be planned
+            raise typer.BadParameter(str(error), param_hint=option_names(
+                WALK_SETTINGS, error.fields)) from None
+        _report(simulation, walk.run, walk.run.summary["description"], worker, video)
     outcome = walk.outcome
     if outcome is None:
         console.print("walking: not judged (the run stopped before the walk began)")
@@ -346,12 +440,27 @@ def robot_geometry(
 
 def video_command(
     run: Annotated[Path, typer.Argument(help="Run folder with model.xml and trajectory.npz.")],
-    fps: Annotated[int, typer.Option(help="Frames per second, 1 to 240.",
-                                     callback=_within(1, 240))] = 30,
+    video_fps: Annotated[float, typer.Option(
+        "--video-fps", "--fps", help="Video frame rate, 1 to 240 frames/s.",
+        callback=_within(1.0, 240.0, "frames/s"))] = VIDEO_FPS,
     width: Annotated[int, typer.Option(help="Pixels, 16 to 7680.",
                                        callback=_within(16, 7680))] = 640,
     height: Annotated[int, typer.Option(help="Pixels, 16 to 4320.",
                                         callback=_within(16, 4320))] = 480,
+    video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
 ) -> None:
-    """Render a robot run offscreen to MP4, a GIF preview and first-frame.png."""
-    _render(run, fps, width, height)
+    """Render a robot run offscreen to MP4, a GIF preview and first-frame.png (in a separate
+    process; a missing model.xml or trajectory.npz is an error, a missing OpenGL a warning)."""
+    settings = VideoSettings(fps=video_fps, width=width, height=height, quality=video_quality)
+    with VideoWorker(settings) as worker:
+        worker.finish(run)
+        try:
+            with progress_bar("video frames") as update:
+                rendered = worker.wait(update)
+        except RenderingUnavailableError as error:
+            console.print(f"[yellow]no video: {error}[/yellow]")
+            return
+        except VideoWorkerError as error:
+            console.print(f"[red]no video: {error}[/red]")
+            raise typer.Exit(1) from None
+    console.print(f"video: {rendered.mp4} ({rendered.frames} frames)")

@@ -4,7 +4,17 @@ A run folder holds ``model.xml`` (the MJCF of the simulated model) and ``traject
 (arrays ``time`` (T,) [s] and ``qpos`` (T, nq)). :func:`render_run_video` replays it at the
 video rate (nearest recorded sample, so free-joint quaternions stay normalised), with a camera
 tracking the ``thorax`` body, and writes ``video.mp4`` (H.264, yuv420p, frames streamed to
-ffmpeg), ``video.gif`` (downscaled preview, about 10 frames/s) and ``first-frame.png``.
+ffmpeg), ``video.gif`` (downscaled preview, about 10 frames/s) and ``first-frame.png``
+(:mod:`pneumaquad.robot.video_output`, whose names this module re-exports).
+:func:`render_states` renders joint positions as they come, for a run rendered while it goes
+(:mod:`pneumaquad.robot.video_worker`).
+
+Quality (:data:`VIDEO_QUALITIES`): ``"fast"`` renders without shadows, reflections and
+multisampling and with capsules and spheres of at most 16 × 8 facets; ``"full"`` keeps the
+model's own visual settings (for the robot: shadows from a 4096 px map, reflections, 4×
+multisampling). On software OpenGL (llvmpipe, 2 cores) a 640 × 480 frame of the quadruped
+takes about 10 ms fast and 90 ms full (13 and 155 ms of CPU; ``benchmarks/video_cost.py``,
+docs/benchmarks.md).
 
 OpenGL backend: MuJoCo binds its context class when ``mujoco`` is first imported, from
 ``MUJOCO_GL`` (unset means GLFW, which needs a display), and a failed context creation can leave
@@ -22,7 +32,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import importlib
-import math
 import os
 import subprocess
 import sys
@@ -31,22 +40,48 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import imageio.v2 as imageio_v2
-import imageio.v3 as imageio_v3
 import numpy as np
-from PIL import Image
 
 from pneumaquad.io.run_folder import MODEL_NAME, TRAJECTORY_NAME
+
+from .video_output import (
+    FIRST_FRAME_NAME,
+    GIF_FPS,
+    GIF_MAX_FRAMES,
+    GIF_MAX_WIDTH,
+    GIF_NAME,
+    MP4_NAME,
+    FrameProgress,
+    FrameSampler,
+    GifPreview,
+    VideoError,
+    VideoFiles,
+    nearest_samples,
+    video_frame_count,
+    write_first_frame_png,
+    write_gif_preview,
+    write_video,
+    write_video_files,
+)
 
 if TYPE_CHECKING:
     import mujoco
 
-MP4_NAME, GIF_NAME, FIRST_FRAME_NAME = "video.mp4", "video.gif", "first-frame.png"
-GIF_FPS, GIF_MAX_WIDTH = 10.0, 320
-GIF_MAX_FRAMES = 300  # a 320 px preview of about 10 MB at most
+__all__ = ["DEFAULT_VIDEO_QUALITY", "FIRST_FRAME_NAME", "GIF_FPS", "GIF_MAX_FRAMES",
+           "GIF_MAX_WIDTH", "GIF_NAME", "MP4_NAME", "RENDER_STYLES", "VIDEO_QUALITIES",
+           "FrameProgress", "FrameSampler", "GifPreview", "MissingRunFileError",
+           "RenderStyle", "RenderingUnavailableError", "VideoError", "VideoFiles",
+           "create_renderer", "load_model", "nearest_samples", "render_first_frame",
+           "render_frames", "render_run_video", "render_states", "render_style",
+           "select_gl_backend", "video_frame_count", "write_first_frame_png",
+           "write_gif_preview", "write_video", "write_video_files"]
+
+#: Rendering qualities, cheapest first (module docstring).
+VIDEO_QUALITIES = ("fast", "full")
+#: The quality the commands and functions render with unless told otherwise.
+DEFAULT_VIDEO_QUALITY = "fast"
 _BACKENDS = ("egl", "osmesa")
 _SYSTEM_PACKAGES = {"egl": "libegl1 libgl1-mesa-dri libgbm1", "osmesa": "libosmesa6"}
-_FFMPEG_OPTIONS = dict(codec="libx264", pixelformat="yuv420p", macro_block_size=1)
 _PROBE_SCRIPT = """
 import mujoco
 model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
@@ -54,10 +89,6 @@ renderer = mujoco.Renderer(model, height=8, width=8)
 renderer.render()
 renderer.close()
 """
-
-
-class VideoError(ValueError):
-    """Invalid input for rendering a run video."""
 
 
 class MissingRunFileError(VideoError, FileNotFoundError):
@@ -69,12 +100,45 @@ class RenderingUnavailableError(RuntimeError):
 
 
 @dataclass(frozen=True)
-class VideoFiles:
-    """Files written by :func:`render_run_video` (``gif`` is ``None`` if not requested)."""
+class RenderStyle:
+    """What a rendering quality changes from the model's visual settings.
 
-    mp4: Path
-    gif: Path | None
-    first_frame: Path
+    Attributes
+    ----------
+    shadows, reflections : bool
+        Scene flags ``mjRND_SHADOW`` and ``mjRND_REFLECTION``.
+    multisamples : int or None
+        Samples per pixel of the offscreen buffer (``visual/quality/offsamples``); ``None``
+        keeps the model's.
+    facets : tuple of int or None
+        Most slices and stacks of capsules, spheres and cylinders (``numslices``,
+        ``numstacks``); ``None`` keeps the model's.
+    """
+
+    shadows: bool
+    reflections: bool
+    multisamples: int | None
+    facets: tuple[int, int] | None
+
+
+#: The style of each of :data:`VIDEO_QUALITIES`.
+RENDER_STYLES = {
+    "fast": RenderStyle(shadows=False, reflections=False, multisamples=0, facets=(16, 8)),
+    "full": RenderStyle(shadows=True, reflections=True, multisamples=None, facets=None),
+}
+
+
+def render_style(quality: str) -> RenderStyle:
+    """The :class:`RenderStyle` of ``quality`` (one of :data:`VIDEO_QUALITIES`).
+
+    Raises
+    ------
+    VideoError
+        For an unknown quality.
+    """
+    if quality not in RENDER_STYLES:
+        raise VideoError(f"video quality {quality!r}: expected one of {', '.join(RENDER_STYLES)}")
+    return RENDER_STYLES[quality]
 
 
 @functools.cache
@@ -149,12 +213,108 @@ def _context_class_bound(backend: str) -> Iterator[None]:
         context_module.GLContext = bound
 
 
-def _nearest_indices(times: np.ndarray, frame_times: np.ndarray) -> np.ndarray:
-    """Index of the recorded sample nearest to each frame time."""
-    upper = np.clip(np.searchsorted(times, frame_times), 1, max(len(times) - 1, 1))
-    lower = upper - 1
-    upper = np.minimum(upper, len(times) - 1)
-    return np.where(frame_times - times[lower] <= times[upper] - frame_times, lower, upper)
+@contextlib.contextmanager
+def _visual_settings(model: mujoco.MjModel, style: RenderStyle) -> Iterator[None]:
+    """The style's multisampling and facets in ``model`` while a rendering context is made
+    (they take effect then); the model's own values are restored afterwards."""
+    quality = model.vis.quality
+    saved = (quality.offsamples, quality.numslices, quality.numstacks)
+    if style.multisamples is not None:
+        quality.offsamples = style.multisamples
+    if style.facets is not None:
+        quality.numslices = min(quality.numslices, style.facets[0])
+        quality.numstacks = min(quality.numstacks, style.facets[1])
+    try:
+        yield
+    finally:
+        quality.offsamples, quality.numslices, quality.numstacks = saved
+
+
+def create_renderer(
+    model: mujoco.MjModel, width: int, height: int, quality: str = DEFAULT_VIDEO_QUALITY
+) -> mujoco.Renderer:
+    """An offscreen renderer of ``width`` × ``height`` [px] drawing in ``quality``.
+
+    The OpenGL backend is chosen first (:func:`select_gl_backend`). The model's offscreen
+    buffer (``model.vis.global_.offwidth/offheight``) is enlarged if smaller than the frame;
+    its other visual settings are left as they were. The scene flags of the style
+    (:data:`RENDER_STYLES`) are set on ``renderer.scene``.
+
+    Raises
+    ------
+    VideoError
+        For an unknown quality.
+    RenderingUnavailableError
+        If no OpenGL context can be created.
+    """
+    import mujoco
+
+    style = render_style(quality)
+    model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+    model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+    backend = select_gl_backend()
+    try:
+        with _context_class_bound(backend), _visual_settings(model, style):
+            renderer = mujoco.Renderer(model, height=height, width=width)
+    except RenderingUnavailableError:
+        raise
+    except Exception as error:
+        message = f"cannot create a MuJoCo renderer with MUJOCO_GL={backend}: {error}"
+        raise RenderingUnavailableError(message) from error
+    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = style.shadows
+    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = style.reflections
+    return renderer
+
+
+def _tracking_camera(
+    model: mujoco.MjModel, tracking_body: str, distance: float | None, azimuth: float,
+    elevation: float,
+) -> mujoco.MjvCamera:
+    import mujoco
+
+    camera = mujoco.MjvCamera()
+    body_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, tracking_body)
+    if body_id >= 0:
+        camera.type, camera.trackbodyid = mujoco.mjtCamera.mjCAMERA_TRACKING, body_id
+    else:
+        camera.type, camera.lookat[:] = mujoco.mjtCamera.mjCAMERA_FREE, model.stat.center
+    camera.distance = 1.5 * model.stat.extent if distance is None else distance
+    camera.azimuth, camera.elevation = azimuth, elevation
+    return camera
+
+
+def render_states(
+    model: mujoco.MjModel,
+    states: Iterable[np.ndarray],
+    *,
+    width: int = 640,
+    height: int = 480,
+    quality: str = DEFAULT_VIDEO_QUALITY,
+    tracking_body: str = "thorax",
+    distance: float | None = None,
+    azimuth: float = 135.0,
+    elevation: float = -20.0,
+) -> Iterator[np.ndarray]:
+    """Render one RGB ``uint8`` frame (height, width, 3) per joint-position vector (nq,).
+
+    ``states`` may be a generator (frames of a run rendered as it goes). The renderer
+    (:func:`create_renderer`) is made at the first frame and closed with the iterator; the
+    other parameters are those of :func:`render_frames`.
+    """
+    import mujoco
+
+    render_style(quality)
+    camera = _tracking_camera(model, tracking_body, distance, azimuth, elevation)
+    renderer = create_renderer(model, width, height, quality)
+    data = mujoco.MjData(model)
+    try:
+        for state in states:
+            data.qpos[:] = state
+            mujoco.mj_forward(model, data)
+            renderer.update_scene(data, camera=camera)
+            yield renderer.render()
+    finally:
+        renderer.close()
 
 
 def render_frames(
@@ -169,6 +329,7 @@ def render_frames(
     distance: float | None = None,
     azimuth: float = 135.0,
     elevation: float = -20.0,
+    quality: str = DEFAULT_VIDEO_QUALITY,
 ) -> Iterator[np.ndarray]:
     """Render a recorded trajectory frame by frame at the video rate.
 
@@ -187,6 +348,8 @@ def render_frames(
         Body the camera tracks; without such a body a free camera looks at the model centre.
     distance, azimuth, elevation
         Camera distance [m] (``None``: 1.5 ``model.stat.extent``) and angles [deg].
+    quality
+        One of :data:`VIDEO_QUALITIES` (module docstring).
 
     Returns
     -------
@@ -197,12 +360,10 @@ def render_frames(
     Raises
     ------
     VideoError
-        At the call, if the arrays do not match the model.
+        At the call, if the arrays do not match the model or the quality is unknown.
     RenderingUnavailableError
         At the first frame, if no OpenGL context can be created.
     """
-    import mujoco
-
     times, qpos = np.asarray(times, dtype=float), np.asarray(qpos, dtype=float)
     if times.ndim != 1 or len(times) == 0:
         raise VideoError(f"time must be a non-empty 1-D array, got shape {times.shape}")
@@ -212,117 +373,12 @@ def render_frames(
         raise VideoError("time must be finite and non-decreasing")
     if not fps > 0:
         raise VideoError(f"fps must be positive, got {fps}")
-    frame_count = math.floor((times[-1] - times[0]) * fps + 1e-9) + 1
-    samples = _nearest_indices(times, times[0] + np.arange(frame_count) / fps)
-
-    camera = mujoco.MjvCamera()
-    body_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, tracking_body)
-    if body_id >= 0:
-        camera.type, camera.trackbodyid = mujoco.mjtCamera.mjCAMERA_TRACKING, body_id
-    else:
-        camera.type, camera.lookat[:] = mujoco.mjtCamera.mjCAMERA_FREE, model.stat.center
-    camera.distance = 1.5 * model.stat.extent if distance is None else distance
-    camera.azimuth, camera.elevation = azimuth, elevation
-    model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
-    model.vis.global_.offheight = max(model.vis.global_.offheight, height)
-    return _frames(model, qpos[samples], camera, width, height)
-
-
-def _frames(
-    model: mujoco.MjModel, qpos: np.ndarray, camera: mujoco.MjvCamera, width: int, height: int
-) -> Iterator[np.ndarray]:
-    """Render one frame per row of ``qpos``; the renderer lives as long as the generator."""
-    import mujoco
-
-    backend = select_gl_backend()
-    try:
-        with _context_class_bound(backend):
-            renderer = mujoco.Renderer(model, height=height, width=width)
-    except RenderingUnavailableError:
-        raise
-    except Exception as error:
-        message = f"cannot create a MuJoCo renderer with MUJOCO_GL={backend}: {error}"
-        raise RenderingUnavailableError(message) from error
-    data = mujoco.MjData(model)
-    try:
-        for row in qpos:
-            data.qpos[:] = row
-            mujoco.mj_forward(model, data)
-            renderer.update_scene(data, camera=camera)
-            yield renderer.render()
-    finally:
-        renderer.close()
-
-
-def write_video(frames: Iterable[np.ndarray], path: Path, fps: float) -> int:
-    """Stream RGB ``uint8`` frames into an H.264 MP4 (yuv420p) and return their number.
-
-    Frames are consumed one at a time; an odd width or height is cropped by one pixel (H.264
-    with yuv420p needs even sizes). The file is removed again if writing fails.
-    """
-    path = Path(path)
-    writer = imageio_v2.get_writer(
-        path, format="FFMPEG", fps=fps, ffmpeg_log_level="error", **_FFMPEG_OPTIONS
-    )
-    count = 0
-    try:
-        for frame in frames:
-            even_height, even_width = frame.shape[0] // 2 * 2, frame.shape[1] // 2 * 2
-            writer.append_data(np.ascontiguousarray(frame[:even_height, :even_width]))
-            count += 1
-    except BaseException:
-        writer.close()
-        path.unlink(missing_ok=True)
-        raise
-    writer.close()
-    if count == 0:
-        path.unlink(missing_ok=True)
-        raise VideoError(f"no frames to write to {path}")
-    return count
-
-
-def _gif_step(fps: float, duration: float | None = None) -> int:
-    """Frames per GIF frame: about 10 GIF frames per second of run, fewer for runs longer
-    than :data:`GIF_MAX_FRAMES` / 10 s (the preview then plays as a time lapse)."""
-    step = max(1, round(fps / GIF_FPS))
-    if duration is not None:
-        step = max(step, math.ceil(duration * fps / GIF_MAX_FRAMES))
-    return step
-
-
-def _downscale(frame: np.ndarray, max_width: int) -> np.ndarray:
-    height, width = frame.shape[:2]
-    if width <= max_width:
-        return frame
-    size = (max_width, max(1, round(height * max_width / width)))
-    return np.asarray(Image.fromarray(frame).resize(size, Image.Resampling.BILINEAR))
-
-
-def _save_gif(frames: list[np.ndarray], path: Path, frame_duration_ms: float) -> Path:
-    if not frames:
-        raise VideoError(f"no frames to write to {path}")
-    imageio_v3.imwrite(path, np.stack(frames), extension=".gif", duration=frame_duration_ms, loop=0)
-    return path
-
-
-def write_gif_preview(
-    frames: Iterable[np.ndarray], path: Path, fps: float, max_width: int = GIF_MAX_WIDTH
-) -> Path:
-    """Write a looping GIF of every ``round(fps / 10)``-th frame, at most ``max_width`` wide.
-
-    It plays in real time at about 10 frames/s; only the kept, downscaled frames are held in
-    memory. Returns ``path``.
-    """
-    step = _gif_step(fps)
-    kept = [_downscale(frame, max_width) for index, frame in enumerate(frames) if index % step == 0]
-    return _save_gif(kept, Path(path), 1000.0 * step / fps)
-
-
-def write_first_frame_png(frame: np.ndarray, path: Path) -> Path:
-    """Write one RGB ``uint8`` frame (height, width, 3) to ``path`` as a PNG and return it."""
-    path = Path(path)
-    imageio_v3.imwrite(path, frame, extension=".png")
-    return path
+    render_style(quality)
+    frame_count = video_frame_count(times[-1] - times[0], fps)
+    samples = nearest_samples(times, times[0] + np.arange(frame_count) / fps)
+    return render_states(model, qpos[samples], width=width, height=height, quality=quality,
+                         tracking_body=tracking_body, distance=distance, azimuth=azimuth,
+                         elevation=elevation)
 
 
 def _load_run(run_folder: Path, max_seconds: float | None = None):
@@ -339,28 +395,48 @@ def _load_run(run_folder: Path, max_seconds: float | None = None):
     if max_seconds is not None and len(times):
         keep = times <= times[0] + max_seconds
         times, qpos = times[keep], qpos[keep]
+    return load_model(model_path), times, qpos
+
+
+def load_model(source: Path | str) -> mujoco.MjModel:
+    """A MuJoCo model from an MJCF file (a :class:`~pathlib.Path`) or MJCF text (a ``str``),
+    with the GL backend chosen before the process's first ``import mujoco`` if possible.
+
+    Raises
+    ------
+    VideoError
+        If MuJoCo cannot load it.
+    RenderingUnavailableError
+        If no backend works or ``mujoco`` cannot be imported with it.
+    """
     backend = select_gl_backend()  # before the first `import mujoco` of the process, if possible
     try:
         import mujoco
     except Exception as error:  # a broken MUJOCO_GL makes the import itself fail
         message = f"importing mujoco with MUJOCO_GL={backend} failed: {error!r}"
         raise RenderingUnavailableError(message) from error
-
     try:
-        model = mujoco.MjModel.from_xml_path(str(model_path))
+        if isinstance(source, Path):
+            return mujoco.MjModel.from_xml_path(str(source))
+        return mujoco.MjModel.from_xml_string(source)
     except ValueError as error:
-        raise VideoError(f"cannot load {model_path}: {error}") from error
-    return model, times, qpos
+        where = source if isinstance(source, Path) else "the model's MJCF"
+        raise VideoError(f"cannot load {where}: {error}") from error
 
 
-def render_first_frame(run_folder: Path, *, width: int = 640, height: int = 480) -> Path:
+def render_first_frame(
+    run_folder: Path, *, width: int = 640, height: int = 480,
+    quality: str = DEFAULT_VIDEO_QUALITY,
+) -> Path:
     """Write only ``first-frame.png`` of a run folder (one rendered frame); returns its path.
 
     Raises the same errors as :func:`render_run_video`.
     """
+    render_style(quality)
     model, times, qpos = _load_run(Path(run_folder))
-    frame = next(iter(render_frames(model, times[:1], qpos[:1], fps=1.0, width=width,
-                                    height=height)))
+    frames = render_frames(model, times[:1], qpos[:1], fps=1.0, width=width, height=height,
+                           quality=quality)
+    frame = next(iter(frames))
     return write_first_frame_png(frame, Path(run_folder) / FIRST_FRAME_NAME)
 
 
@@ -373,6 +449,8 @@ def render_run_video(
     height: int = 480,
     gif: bool = True,
     max_seconds: float | None = None,
+    quality: str = DEFAULT_VIDEO_QUALITY,
+    progress: FrameProgress | None = None,
 ) -> VideoFiles:
     """Render ``video.mp4``, ``video.gif`` and ``first-frame.png`` of a run folder.
 
@@ -389,6 +467,10 @@ def render_run_video(
         30 s become a time lapse of :data:`GIF_MAX_FRAMES` frames).
     max_seconds
         Render only the first ``max_seconds`` of the trajectory.
+    quality
+        One of :data:`VIDEO_QUALITIES` (module docstring).
+    progress
+        Called after each frame with (frames written, frames in the video).
 
     Returns
     -------
@@ -400,29 +482,18 @@ def render_run_video(
     MissingRunFileError
         If ``model.xml`` or ``trajectory.npz`` is missing (a ``FileNotFoundError`` naming it).
     VideoError
-        If the trajectory is malformed or the model cannot be loaded.
+        If the trajectory is malformed, the model cannot be loaded or the quality is unknown.
     RenderingUnavailableError
         If no offscreen OpenGL backend works.
     """
+    render_style(quality)
     model, times, qpos = _load_run(Path(run_folder), max_seconds)
-    frames = render_frames(model, times, qpos, fps=fps, width=width, height=height)
-
+    frames = render_frames(model, times, qpos, fps=fps, width=width, height=height,
+                           quality=quality)
     folder = Path(run_folder) if output is None else Path(output)
     folder.mkdir(parents=True, exist_ok=True)
-    gif_path = folder / GIF_NAME if gif else None
-    files = VideoFiles(folder / MP4_NAME, gif_path, folder / FIRST_FRAME_NAME)
-    gif_frames: list[np.ndarray] = []
-    step = _gif_step(fps, float(times[-1] - times[0]) if len(times) else None)
-
-    def tap(frames: Iterator[np.ndarray]) -> Iterator[np.ndarray]:
-        for index, frame in enumerate(frames):
-            if index == 0:
-                write_first_frame_png(frame, files.first_frame)
-            if gif and index % step == 0:
-                gif_frames.append(_downscale(frame, GIF_MAX_WIDTH))
-            yield frame
-
-    write_video(tap(frames), files.mp4, fps)
-    if files.gif is not None:
-        _save_gif(gif_frames, files.gif, 1000.0 * step / fps)
-    return files
+    duration = float(times[-1] - times[0])
+    preview = GifPreview(fps, duration) if gif else None
+    total = video_frame_count(duration, fps)
+    return write_video_files(frames, folder, fps, preview, progress=progress,
+                             frame_total=lambda: total)
