@@ -36,6 +36,7 @@ __all__ = [
     "option_range",
     "progress_bar",
     "quantity",
+    "report_command_time",
     "simulated_duration",
 ]
 
@@ -187,17 +188,24 @@ def finish_run(folder: Path, summary: dict, clock: StageClock | None = None,
         if key in summary:
             console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
     if clock is not None:
-        simulated = summary.get("simulated time [s]")
-        report = clock.report(simulated)
-        if simulated is not None:
-            console.print(f"  command real-time factor (start-up, run, plots): "
-                          f"{report['real-time factor']:.3g} ({report['total [s]']:.3g} s)",
-                          markup=False, highlight=False)
-        if profile:
-            _print_profile(folder, report)
+        report_command_time(folder, summary, clock, profile)
     if summary.get("interrupted"):
         console.print("[yellow]interrupted: the recording holds the part that ran[/yellow]")
         raise typer.Exit(130)
+
+
+def report_command_time(folder: Path, summary: dict, clock: StageClock,
+                        profile: bool = False) -> None:
+    """Print the command's real-time factor (from its start: start-up, run, plots); with
+    ``profile`` write ``profile.json`` to ``folder`` and print its stages."""
+    simulated = summary.get("simulated time [s]")
+    report = clock.report(simulated)
+    if simulated is not None:
+        console.print(f"  command real-time factor (start-up, run, plots): "
+                      f"{report['real-time factor']:.3g} ({report['total [s]']:.3g} s)",
+                      markup=False, highlight=False)
+    if profile:
+        _print_profile(folder, report)
 
 
 def _print_profile(folder: Path, report: dict) -> None:

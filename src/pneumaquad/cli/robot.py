@@ -11,7 +11,6 @@ waits for it at the end. Without a video the worker writes only ``first-frame.pn
 from __future__ import annotations
 
 import contextlib
-import inspect
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -23,13 +22,17 @@ import typer
 from pneumaquad.cli.common import (
     MAX_SIMULATED_TIME,
     OutputOption,
+    ProfileOption,
     SetOption,
+    command_clock,
     console,
     finish_run,
     option_range,
     progress_bar,
+    report_command_time,
 )
 from pneumaquad.cli.settings import option_names, settings_options
+from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.locomotion.walk_run import WALK_SETTINGS
 from pneumaquad.locomotion.walking import WalkSettings
 from pneumaquad.params import JOINT_NAMES, load_robot
@@ -89,12 +92,17 @@ VideoQualityOption = Annotated[
 
 
 def _simulation(params: str, overrides: list[str] | None, configuration: str,
-                environment: str = "flat", seed: int = 0, supply: str | None = None):
+                environment: str = "flat", seed: int = 0, supply: str | None = None,
+                clock: StageClock | None = None):
     from pneumaquad.robot.builder import build_robot
     from pneumaquad.robot.simulation import RobotSimulation
 
+    begun = clock.elapsed() if clock is not None else 0.0
     robot = build_robot(load_robot(params, overrides or []), configuration, environment, seed)
-    return RobotSimulation(robot, supply=supply)
+    simulation = RobotSimulation(robot, supply=supply)
+    if clock is not None:
+        clock.add("model (parameters, MuJoCo model, actuator bank)", clock.elapsed() - begun)
+    return simulation
 
 
 def _progress(update: Callable[[int, int], None]) -> Callable[[float, float], None]:
@@ -114,46 +122,48 @@ def _start_video(video: bool, fps: float, quality: str) -> VideoWorker | None:
         return None
 
 
-def _sample_hook(run_function: Callable[..., Any], worker: VideoWorker | None, video: bool,
-                 simulation) -> dict[str, Any]:
-    """``on_sample=worker.add_sample`` for a video and a run function that takes that hook,
-    after sending the model: the worker renders while the run goes. Otherwise nothing: the
-    worker renders ``trajectory.npz`` once the run has ended."""
+def _sample_hook(worker: VideoWorker | None, video: bool, simulation) -> dict[str, Any]:
+    """``on_sample=worker.add_sample`` for a video, after sending the model: the worker
+    renders while the run goes. Without a video nothing: the worker renders only
+    first-frame.png once the run has ended."""
     if not video or worker is None:
-        return {}
-    if "on_sample" not in inspect.signature(run_function).parameters:
         return {}
     worker.send_model(simulation.robot.to_xml())
     return {"on_sample": worker.add_sample}
 
 
 def _run(simulation, phases, folder_option: Path | None, kind: str, description: str,
-         worker: VideoWorker | None, video: bool, joints: list[str] | None = None) -> Path:
+         worker: VideoWorker | None, video: bool, clock: StageClock, profile: bool,
+         joints: list[str] | None = None) -> Path:
     from pneumaquad.io.run_folder import create_run_folder
     from pneumaquad.robot.experiment import run_phases
 
     folder = create_run_folder(folder_option, kind)
     with progress_bar(kind) as update:
         run = run_phases(simulation, phases, folder, description, _progress(update),
-                         **_sample_hook(run_phases, worker, video, simulation))
-    _report(simulation, run, description, worker, video, joints)
+                         clock=clock, **_sample_hook(worker, video, simulation))
+    _report(simulation, run, description, worker, video, clock, profile, joints)
     return folder
 
 
 def _report(simulation, run, description: str, worker: VideoWorker | None, video: bool,
-            joints: list[str] | None = None) -> None:
+            clock: StageClock, profile: bool, joints: list[str] | None = None) -> None:
     """Plots, video and key figures of a finished robot run; exit 130 if interrupted.
 
     ``worker`` (:func:`_start_video`) renders the video, or only first-frame.png without
     ``video``. It is told that the run has ended first, works while the plots are drawn,
     and is waited for at the end (a progress bar; a yellow warning if it fails; Ctrl-C
-    cancels it and exits with 130, the run folder complete).
+    cancels it and exits with 130, the run folder complete). The command's real-time
+    factor follows, and with ``profile`` where its wall time went (``profile.json``).
     """
     folder = run.folder
     if worker is not None:
         worker.finish(folder, first_frame_only=not video)
-    _report_figures(simulation, run, description, joints)
-    waited = _wait_for_video(worker, folder, first_frame_only=not video)
+    with clock.stage("plots"):
+        _report_figures(simulation, run, description, joints)
+    with clock.stage("video (waiting for the worker)" if video else "first frame (waiting)"):
+        waited = _wait_for_video(worker, folder, first_frame_only=not video)
+    report_command_time(folder, run.summary, clock, profile)
     if run.summary.get("interrupted"):
         finish_run(folder, run.summary)
     if not waited:
@@ -241,6 +251,7 @@ def leg_validate(
     video: VideoOption = False,
     video_fps: VideoFpsOption = VIDEO_FPS,
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
+    profile: ProfileOption = False,
 ) -> None:
     """Thesis 5.5.2: one joint of the front-right leg follows a test signal.
 
@@ -249,6 +260,8 @@ def leg_validate(
     """
     from pneumaquad.io.run_folder import create_run_folder
     from pneumaquad.robot.scenarios import LEG_SIGNALS, leg_validation_phases
+
+    clock = command_clock()
 
     if joint not in (*JOINT_NAMES, "all"):
         raise typer.BadParameter(f"{joint!r}: expected one of {', '.join(JOINT_NAMES)} or all",
@@ -264,11 +277,12 @@ def leg_validate(
         for kind in signals:
             worker = _start_video(video, video_fps, video_quality)
             with worker or contextlib.nullcontext():
-                simulation = _simulation(params, overrides, "fixed")
+                simulation = _simulation(params, overrides, "fixed", clock=clock)
                 phases = leg_validation_phases(simulation, tested, kind, settle)
                 folder = base / f"{tested}-{kind}" if several else output
                 _run(simulation, phases, folder, f"leg-{tested}-{kind}",
-                     f"front-right {tested}: {kind}", worker, video)
+                     f"front-right {tested}: {kind}", worker, video, clock, profile)
+                clock = StageClock()  # the next run's stages (start-up counted once)
 
 
 @leg_app.command("foot-cycle")
@@ -286,9 +300,12 @@ def leg_foot_cycle(
     video: VideoOption = False,
     video_fps: VideoFpsOption = VIDEO_FPS,
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
+    profile: ProfileOption = False,
 ) -> None:
     """Thesis 5.5.2.4: the walking-like foot cycle of the front-right leg through IK."""
     from pneumaquad.robot.scenarios import FOOT_CYCLE_PERIODS, foot_cycle_phases
+
+    clock = command_clock()
 
     rates = tuple(FOOT_CYCLE_PERIODS) if rate == "all" else (rate,)
     if any(r not in FOOT_CYCLE_PERIODS for r in rates):
@@ -296,10 +313,11 @@ def leg_foot_cycle(
                                  param_hint="--rate")
     settings = [*(overrides or []), f"controller.alpha.gain_scale={alpha_gain_scale!r}"]
     with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
-        simulation = _simulation(params, settings, "fixed")
+        simulation = _simulation(params, settings, "fixed", clock=clock)
         phases = foot_cycle_phases(simulation, rates, cycles)
         _run(simulation, phases, output, f"foot-cycle-{rate}",
-             f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", worker, video)
+             f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", worker, video, clock,
+             profile)
 
 
 @robot_app.command("stand")
@@ -321,9 +339,12 @@ def robot_stand(
     video: VideoOption = True,
     video_fps: VideoFpsOption = VIDEO_FPS,
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
+    profile: ProfileOption = False,
 ) -> None:
     """The quadruped stands up from lying on the ground, holds, follows body commands."""
     from pneumaquad.robot.scenarios import stand_up_phases
+
+    clock = command_clock()
 
     if supply not in (None, "ideal", "tank"):
         raise typer.BadParameter(f"{supply!r}: expected ideal or tank", param_hint="--supply")
@@ -332,10 +353,11 @@ def robot_stand(
                                  param_hint="--configuration")
     _check_environment(environment)
     with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
-        simulation = _simulation(params, overrides, configuration, environment, seed, supply)
+        simulation = _simulation(params, overrides, configuration, environment, seed, supply,
+                                 clock)
         phases = stand_up_phases(simulation, hold=hold, posture=posture)
         _run(simulation, phases, output, f"{configuration}-stand",
-             f"{configuration}: stand up and hold", worker, video)
+             f"{configuration}: stand up and hold", worker, video, clock, profile)
 
 
 @robot_app.command("walk")
@@ -350,10 +372,13 @@ def robot_walk(
     video: VideoOption = True,
     video_fps: VideoFpsOption = VIDEO_FPS,
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
+    profile: ProfileOption = False,
 ) -> None:
     """The quadruped stands up and walks a statically stable crawl (lateral-sequence wave
     gait, duty factor >= 0.75); reports success or failure with the reason."""
     from pneumaquad.locomotion.walk_run import WalkSettingsError, run_walk
+
+    clock = command_clock()
 
     _check_environment(environment)
     distance, speed = settings.distance, settings.speed
@@ -362,16 +387,18 @@ def robot_walk(
             f"walking {distance:g} m at {speed:g} m/s takes {distance / speed:.4g} s; expected "
             f"at most {MAX_SIMULATED_TIME:g} s of walking", param_hint="--distance / --speed")
     with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
-        simulation = _simulation(params, overrides, "quadruped", environment, seed)
+        simulation = _simulation(params, overrides, "quadruped", environment, seed,
+                                 clock=clock)
         kind = f"walk-{environment}"
         try:
             with progress_bar(kind) as update:
                 walk = run_walk(simulation, settings, output, progress=_progress(update),
-                                **_sample_hook(run_walk, worker, video, simulation))
+                                clock=clock, **_sample_hook(worker, video, simulation))
         except WalkSettingsError as error:  # out of range, or a gait that cannot be planned
             raise typer.BadParameter(str(error), param_hint=option_names(
                 WALK_SETTINGS, error.fields)) from None
-        _report(simulation, walk.run, walk.run.summary["description"], worker, video)
+        _report(simulation, walk.run, walk.run.summary["description"], worker, video, clock,
+                profile)
     outcome = walk.outcome
     if outcome is None:
         console.print("walking: not judged (the run stopped before the walk began)")
@@ -448,6 +475,7 @@ def video_command(
     height: Annotated[int, typer.Option(help="Pixels, 16 to 4320.",
                                         callback=_within(16, 4320))] = 480,
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
+    profile: ProfileOption = False,
 ) -> None:
     """Render a robot run offscreen to MP4, a GIF preview and first-frame.png (in a separate
     process; a missing model.xml or trajectory.npz is an error, a missing OpenGL a warning)."""

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from pneumaquad.io.run_folder import RunFolderWriter, create_run_folder
 from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.params.schema import Bounds
@@ -159,6 +161,7 @@ def run_walk(
     progress: Callable[[float, float], None] | None = None,
     figure_title: str | None = None,
     clock: StageClock | None = None,
+    on_sample: Callable[[float, np.ndarray], None] | None = None,
 ) -> JudgedWalk:
     """Stand up, walk, stop; write the run folder and judge the walk (module docstring).
 
@@ -179,6 +182,9 @@ def run_walk(
     clock : StageClock, optional
         Receives the wall time of the planning, of each stage of the run
         (:func:`~pneumaquad.robot.experiment.run_phases`) and of the judgement.
+    on_sample : callable, optional
+        Given to :func:`~pneumaquad.robot.experiment.run_phases`: called with (simulated
+        time [s], qpos) of each recorded sample, e.g. to render the video while the run goes.
 
     Raises
     ------
@@ -194,7 +200,7 @@ def run_walk(
     where = f"{settings.distance:g} m on {robot.environment}"
     folder = create_run_folder(output, f"walk-{robot.environment}")
     run = run_phases(simulation, phases, folder, description or f"quadruped: walk {where}",
-                     progress, clock=clock)
+                     progress, clock=clock, on_sample=on_sample)
     if run.interrupted or "walk" not in run.summary["phases"]:
         return JudgedWalk(run, plan, None, None)
     with clock.stage("walk judgement"):

@@ -253,7 +253,7 @@ def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bo
     begun = time.perf_counter()
     bank = rig_bank(setups)  # the first in a process also loads the compiled code
     if clock is not None:
-        clock.add("set-up: rig bank, compiled code loaded", time.perf_counter() - begun)
+        clock.add("set-up (rig bank, compiled code loaded)", time.perf_counter() - begun)
     rigs, total = signals.shape
     signals = np.ascontiguousarray(signals, dtype=float)
     records, rows = new_rows(total, rigs)

@@ -125,6 +125,7 @@ def run_phases(
     progress: Callable[[float, float], None] | None = None,
     extra_summary: dict[str, Any] | None = None,
     clock: StageClock | None = None,
+    on_sample: Callable[[float, np.ndarray], None] | None = None,
 ) -> RobotRun:
     """Play ``phases`` on ``simulation`` and write the run folder (module docstring).
 
@@ -134,6 +135,11 @@ def run_phases(
     per chunk), ``"recording"`` (rows, CSV and Parquet, trajectory) and ``"run folder"``.
     The summary's ``"wall time [s]"`` is the whole run from the first phase to the
     recording written.
+
+    ``on_sample(time, qpos)`` (optional) is called with each sample of ``trajectory.npz`` as
+    it is recorded, the first one after ``model.xml`` has been written: simulated time [s]
+    and joint positions (nq,), a row it must not modify (e.g. a video worker that renders
+    while the run goes, :meth:`pneumaquad.robot.video_worker.VideoWorker.add_sample`).
     """
     clock = StageClock() if clock is None else clock
     robot = simulation.robot
@@ -168,6 +174,8 @@ def run_phases(
             times[recorded] = simulation.time
             qpos[recorded] = simulation.data.qpos
             recorded += 1
+            if on_sample is not None:
+                on_sample(times[recorded - 1], qpos[recorded - 1])
 
         record(simulation.reference_angles)
         try:
