@@ -54,6 +54,15 @@ def rig_reference(duration: float) -> tuple[Any, np.ndarray]:
     return setup, sine(0.875 * INCH, 0.4 * INCH, 0.5, duration, setup.simulation.control_step)
 
 
+def background_recorder(writer: RunFolderWriter) -> Any:
+    """The rig command's recorder (CSV written by a writer thread), or the plain one of a
+    version of the code without that mode."""
+    try:
+        return writer.recorder(RIG_COLUMNS, background=True)
+    except TypeError:
+        return writer.recorder(RIG_COLUMNS)
+
+
 def time_rig_in_process(repeats: int, duration: float) -> tuple[Stats, Stats, Stats]:
     """Warm-process seconds of the bare kernel, of the run with its recording written and
     of writing that recording alone (CSV blocks of 500 rows and the Parquet file, in this
@@ -70,7 +79,7 @@ def time_rig_in_process(repeats: int, duration: float) -> tuple[Stats, Stats, St
             writer = RunFolderWriter(Path(folder) / f"run-{repeat}")
             writer.write_parameters(setup)
             begun = time.perf_counter()
-            with writer.recorder(RIG_COLUMNS, background=True) as recorder:
+            with background_recorder(writer) as recorder:
                 simulate_rig(setup, reference, True, recorder=recorder)
             run.append(time.perf_counter() - begun)
             writer = RunFolderWriter(Path(folder) / f"write-{repeat}")
@@ -180,7 +189,7 @@ def main() -> None:
              f"{simulated / walk_run.median:.1f}",
              f"{walk_run.median / physics.median:.2f}"]]
     for name in ("simulation", "walking feedback", "recording", "walk plan", "plots",
-                 "start-up", "model"):
+                 "start-up", "model (parameters, MuJoCo model, actuator bank)"):
         seconds = stats([stage(w, name) for w in walks])
         if seconds.median > 0:
             rows.append([f"  {name}", seconds.spread(3),

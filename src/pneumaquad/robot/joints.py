@@ -190,9 +190,14 @@ class CylinderJoints:
         ``joints``; see :meth:`RobotSimulation.track_forces
         <pneumaquad.robot.simulation.RobotSimulation.track_forces>`."""
         index = slice(None) if joints is None else joints
-        gains = np.broadcast_to(np.asarray(gain, dtype=float),
-                                self.settings["force_tracking_gain"][index].shape)
-        if np.any(gains < 0.0) or not np.all(np.isfinite(gains)):
+        if isinstance(gain, float | int):  # the walking controller's case, once per chunk
+            valid = math.isfinite(gain) and gain >= 0.0
+            gains: float | np.ndarray = float(gain)
+        else:
+            gains = np.broadcast_to(np.asarray(gain, dtype=float),
+                                    self.settings["force_tracking_gain"][index].shape)
+            valid = bool(np.all(gains >= 0.0) and np.all(np.isfinite(gains)))
+        if not valid:
             raise ValueError(f"force tracking gain must be finite and >= 0, got {gain!r}")
         if not (math.isfinite(stiffness) and stiffness > 0.0):
             raise ValueError(f"stance stiffness factor must be finite and > 0, got "
