@@ -48,4 +48,5 @@ bench: setup
 	$(BIN)/python benchmarks/robot_speed.py
 	$(BIN)/python benchmarks/network_latency.py
 	$(BIN)/python benchmarks/gym_speed.py
+	$(BIN)/python benchmarks/end_to_end.py
 	$(BIN)/pneumaquad report --cost-table --output runs/bench-cost-table
