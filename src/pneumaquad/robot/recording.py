@@ -193,18 +193,17 @@ def fill_recording_row(simulation: RobotSimulation, reference_angles: np.ndarray
                          simulation.foot_normal_forces(), thorax_attitude(simulation))
     joints, legs = simulation.robot.joint_count, len(simulation.robot.legs)
     row[0] = simulation.time
-    start = 1
-    per_joint = row[start:start + joints * len(JOINT_COLUMNS)].reshape(joints, -1)
-    for index, column in enumerate(JOINT_COLUMNS):
-        per_joint[:, index] = column.source(sources)
-    start += per_joint.size
-    for column in THORAX_COLUMNS:
-        row[start] = column.source(sources)
-        start += 1
-    per_leg = row[start:start + legs * len(FOOT_COLUMNS)].reshape(legs, -1)
-    for index, column in enumerate(FOOT_COLUMNS):
-        per_leg[:, index] = column.source(sources)
-    start += per_leg.size
-    for column in BODY_COLUMNS:
-        row[start] = column.source(sources)
-        start += 1
+    start = _fill_columns(row, 1, joints, JOINT_COLUMNS, sources)
+    start = _fill_columns(row, start, 1, THORAX_COLUMNS, sources)
+    start = _fill_columns(row, start, legs, FOOT_COLUMNS, sources)
+    _fill_columns(row, start, 1, BODY_COLUMNS, sources)
+
+
+def _fill_columns(row: np.ndarray, start: int, count: int, columns: tuple[Column, ...],
+                  sources: RowSources) -> int:
+    """Write a group of columns from ``row[start]`` on: ``count`` entries (joints, legs,
+    or 1 for the thorax and body), each with all of ``columns``; the index after it."""
+    block = row[start:start + count * len(columns)].reshape(count, len(columns))
+    for index, column in enumerate(columns):
+        block[:, index] = column.source(sources)
+    return start + block.size
