@@ -177,6 +177,27 @@ def test_cli_leg_validate_writes_a_run_folder(tmp_path: Path) -> None:
     assert "front_right_gamma cap pressure [Pa]" in recording
 
 
+def test_cli_robot_profile_accounts_for_the_wall_time(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    result = runner.invoke(
+        app, ["leg", "validate", "--joint", "gamma", "--signal", "fast-sine", "--settle", "0.2",
+              "--no-video", "--profile", "-o", str(out)],
+    )
+    assert result.exit_code == 0, result.output
+    assert "command real-time factor" in result.output
+    profile = json.loads((out / "profile.json").read_text())
+    stages = profile["stages"]
+    for stage in ("model (parameters, MuJoCo model, actuator bank)", "simulation",
+                  "recording", "plots"):
+        assert stages[stage]["seconds"] > 0.0
+    summary = json.loads((out / "summary.json").read_text())
+    # the run's own stages lie within its wall time, and all of them within the total
+    run_stages = sum(stages[name]["seconds"] for name in ("simulation", "recording"))
+    assert run_stages <= summary["wall time [s]"]
+    timed = sum(entry["seconds"] for name, entry in stages.items() if ":" not in name)
+    assert timed + profile["untimed [s]"] == pytest.approx(profile["total [s]"])
+
+
 def test_cli_rejects_bad_robot_values(tmp_path: Path) -> None:
     result = subprocess.run(
         [*CLI, "leg", "validate", "--set", 'leg.gamma.upper_limit="95 kg"', "-o",
