@@ -15,6 +15,8 @@ The few names most work starts from are available here; each is loaded on first 
 Everything else lives in the layers listed in the README's "Layout".
 """
 
+import sys
+from collections.abc import Callable
 from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
 from typing import Any
@@ -42,16 +44,30 @@ _PUBLIC = {
 __all__ = ["__version__", *_PUBLIC]
 
 
-def __getattr__(name: str) -> Any:
-    """Load a public name from its module on first use (PEP 562)."""
-    module_name = _PUBLIC.get(name)
-    if module_name is None:
-        raise AttributeError(f"module 'pneumaquad' has no attribute {name!r}")
-    module = import_module(module_name)
-    value = module if module_name.rsplit(".", 1)[1] == name else getattr(module, name)
-    globals()[name] = value
-    return value
+def lazy_names(package: str, public: dict[str, str]
+               ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """The ``__getattr__`` and ``__dir__`` of a package whose public names load on first
+    use (PEP 562).
+
+    ``public`` maps each name to the module that defines it, absolute or relative to
+    ``package`` (``"metrics"``); a name that is its module's last component is the module
+    itself. A loaded name is kept in the package's namespace.
+    """
+
+    def load(name: str) -> Any:
+        module_name = public.get(name)
+        if module_name is None:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        absolute = module_name if "." in module_name else f"{package}.{module_name}"
+        module = import_module(absolute)
+        value = module if absolute.rsplit(".", 1)[1] == name else getattr(module, name)
+        setattr(sys.modules[package], name, value)
+        return value
+
+    def names() -> list[str]:
+        return sorted(set(vars(sys.modules[package])) | set(public))
+
+    return load, names
 
 
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_PUBLIC))
+__getattr__, __dir__ = lazy_names(__name__, _PUBLIC)

@@ -10,8 +10,7 @@ one module of the package does not import the others (and their SciPy or
 Matplotlib).
 """
 
-from importlib import import_module
-from typing import Any
+from pneumaquad import lazy_names
 
 #: public name -> module of the package that defines it
 _PUBLIC = {
@@ -55,15 +54,4 @@ _PUBLIC = {
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name: str) -> Any:
-    """Load a public name from its module on first use."""
-    module_name = _PUBLIC.get(name)
-    if module_name is None:
-        raise AttributeError(f"module 'pneumaquad.analysis' has no attribute {name!r}")
-    value = getattr(import_module(f"{__name__}.{module_name}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_PUBLIC))
+__getattr__, __dir__ = lazy_names(__name__, _PUBLIC)
