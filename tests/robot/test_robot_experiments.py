@@ -196,6 +196,13 @@ def test_cli_robot_profile_accounts_for_the_wall_time(tmp_path: Path) -> None:
     assert run_stages <= summary["wall time [s]"]
     timed = sum(entry["seconds"] for name, entry in stages.items() if ":" not in name)
     assert timed + profile["untimed [s]"] == pytest.approx(profile["total [s]"])
+    # the compiled steps' parts (each timed alone) and the rest make up the measured stage
+    parts = [entry["seconds"] for name, entry in stages.items()
+             if name.startswith("simulation: ")]
+    assert len(parts) == 4 and min(parts) >= 0.0
+    assert sum(parts) == pytest.approx(stages["simulation"]["seconds"])
+    assert stages["simulation: MuJoCo (estimated)"]["seconds"] > (
+        stages["simulation: actuators (estimated)"]["seconds"])
 
 
 def test_cli_rejects_bad_robot_values(tmp_path: Path) -> None:

@@ -163,6 +163,12 @@ def _report(simulation, run, description: str, worker: VideoWorker | None, video
         _report_figures(simulation, run, description, joints)
     with clock.stage("video (waiting for the worker)" if video else "first frame (waiting)"):
         waited = _wait_for_video(worker, folder, first_frame_only=not video)
+    if profile:
+        from pneumaquad.robot.profiling import split_simulation_time
+
+        steps = round(run.summary["simulated time [s]"] / simulation.control_step)
+        with clock.stage("profile (timing the parts of the simulation)"):
+            split_simulation_time(simulation, clock, steps)
     report_command_time(folder, run.summary, clock, profile)
     if run.summary.get("interrupted"):
         finish_run(folder, run.summary)
