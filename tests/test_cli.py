@@ -317,3 +317,11 @@ def test_params_show_and_check_every_kind_of_set(tmp_path: Path, name: str) -> N
     resolved.write_text(shown.stdout)
     checked = run_cli("params", "check", str(resolved), cwd=tmp_path)
     assert checked.returncode == 0, checked.stderr
+
+
+def test_version_prints_the_installed_version(tmp_path: Path) -> None:
+    from importlib.metadata import version
+
+    done = run_cli("--version", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == f"pneumaquad {version('pneumaquad')}"

@@ -62,6 +62,24 @@ app.add_typer(params_app, name="params")
 app.add_typer(rig_app, name="rig")
 
 
+def _print_version(asked: bool) -> None:
+    """``--version``: the installed version (pyproject.toml's), then exit."""
+    if asked:
+        from pneumaquad import __version__
+
+        typer.echo(f"pneumaquad {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(
+    version: Annotated[bool, typer.Option(
+        "--version", help="Print the version and exit.", is_eager=True,
+        callback=_print_version)] = False,
+) -> None:
+    """pneumaquad: simulator for pneumatically actuated legged robots."""
+
+
 @params_app.command("list")
 def params_list() -> None:
     """List the shipped parameter sets."""
