@@ -325,3 +325,14 @@ def test_version_prints_the_installed_version(tmp_path: Path) -> None:
     done = run_cli("--version", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == f"pneumaquad {version('pneumaquad')}"
+
+
+def test_default_run_folders_name_the_command(tmp_path: Path) -> None:
+    step = run_cli("rig", "step", "6 V", "--duration", "0.2 s", "--step-time", "0.1 s",
+                   cwd=tmp_path)
+    tracked = run_cli("rig", "track", "step", "--levels", "0.5 in,0.6 in", "--dwell", "0.1 s",
+                      cwd=tmp_path)
+    assert step.returncode == 0 and tracked.returncode == 0, step.stderr + tracked.stderr
+    names = sorted(folder.name for folder in (tmp_path / "runs").iterdir())
+    assert len(names) == 2
+    assert names[0].startswith("rig-step-") and names[1].startswith("rig-track-step-")

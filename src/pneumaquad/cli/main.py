@@ -276,7 +276,7 @@ def rig_track(
         position_column,
         position_unit,
     )
-    folder = create_run_folder(output, f"rig-{reference}")
+    folder = create_run_folder(output, f"rig-track-{reference}")
     with progress_bar(f"rig track {reference}") as update:
         _, summary = run_rig_experiment(
             setup, folder, signal, True, f"closed-loop {reference} tracking", None, update,
