@@ -53,24 +53,18 @@ from numba import njit
 
 from _bench import Stats, machine_line, stats, table, write_json
 from pneumaquad.core.control.pid import pid_update
-from pneumaquad.core.kernel import advance_actuators
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
-from pneumaquad.robot.coupling import robot_control_step
+from pneumaquad.robot.profiling import (
+    bare_mujoco_seconds,
+    control_step_seconds,
+    kernel_seconds,
+)
 from pneumaquad.robot.simulation import RobotSimulation
 
 POSTURE_DEG = (0.0, -20.0, 50.0)
 TARGET_REAL_TIME = 50.0
 TARGET_OVERHEAD = 0.20
-
-
-@njit(cache=False)
-def kernel_loop(count, params, state, commands, positions, velocities, dt, substeps, supply, out):
-    """``count`` calls of the pneumatic kernel on all rows, from compiled code, as the
-    robot's control step calls it (no friction output: the seal friction is MuJoCo's)."""
-    for _ in range(count):
-        advance_actuators(params, state, commands, positions, velocities, dt, substeps, supply,
-                          out, False)
 
 
 @njit(cache=False)
@@ -81,13 +75,6 @@ def pid_loop(count, gains, pid_state, references, positions, dt):
         for i in range(gains.shape[0]):
             total += pid_update(gains[i], pid_state[i], references[i], positions[i], dt)
     return total
-
-
-@njit(cache=False)
-def control_loop(count, mujoco, cylinders, actuators, controllers, trace, coupling, settings):
-    """``count`` calls of the whole control step (no MuJoCo step) from compiled code."""
-    for _ in range(count):
-        robot_control_step(mujoco, cylinders, actuators, controllers, trace, coupling, settings)
 
 
 def standing_simulation(overrides: list[str] | None = None) -> RobotSimulation:
@@ -158,35 +145,6 @@ def time_full_recording(sim: RobotSimulation, steps: int, every: int) -> float:
     return (time.perf_counter() - start) / (steps // every * every)
 
 
-def time_bare(sim: RobotSimulation, snapshot: mujoco.MjData, steps: int) -> float:
-    data = mujoco.MjData(sim.model)
-    mujoco.mj_copyData(data, sim.model, snapshot)  # same pose, contacts and motor forces
-    start = time.perf_counter()
-    mujoco.mj_step(sim.model, data, nstep=steps)
-    return (time.perf_counter() - start) / steps
-
-
-def time_kernel(sim: RobotSimulation, steps: int) -> float:
-    state, supply, outputs = sim.state.copy(), sim.supply.copy(), sim.outputs.copy()
-    commands, positions = sim.commands.copy(), sim.positions.copy()
-    velocities = sim.velocities.copy()
-    start = time.perf_counter()
-    kernel_loop(steps, sim.params, state, commands, positions, velocities, sim.control_step,
-                sim.substeps, supply, outputs)  # fmt: skip
-    return (time.perf_counter() - start) / steps
-
-
-def time_control_step(sim: RobotSimulation, steps: int) -> float:
-    """The control step on copies of the simulation's arrays (its state is left as is)."""
-    copies = [bundle._make(array.copy() for array in bundle) for bundle in (
-        sim.mujoco, sim.cylinders, sim.actuators, sim.controllers, sim.trace)]
-    coupling = sim.coupling.copy()
-    coupling["pending"] = 1  # the kernel integrates every step, as in a run
-    start = time.perf_counter()
-    control_loop(steps, *copies, coupling, sim.step_settings)
-    return (time.perf_counter() - start) / steps
-
-
 def time_pid(sim: RobotSimulation, steps: int) -> float:
     references = sim.reference_positions.copy()
     positions = sim.positions + 1e-4 * np.sin(np.arange(sim.robot.joint_count))
@@ -233,9 +191,9 @@ def main() -> None:
             "full": lambda: time_full(sim, n),
             "full, chunks of 10": lambda: time_full_chunks(sim, n, every),
             "full, recording every 10": lambda: time_full_recording(sim, n, every),
-            "bare MuJoCo mj_step": lambda: time_bare(sim, snapshot, n),
-            "pneumatic kernel": lambda: time_kernel(sim, n),
-            "control step w/o MuJoCo": lambda: time_control_step(sim, n),
+            "bare MuJoCo mj_step": lambda: bare_mujoco_seconds(sim, n, snapshot),
+            "pneumatic kernel": lambda: kernel_seconds(sim, n),
+            "control step w/o MuJoCo": lambda: control_step_seconds(sim, n),
             "12 pid_update": lambda: time_pid(sim, n),
             "recording row / 10": lambda: time_recording(sim, n // every) / every,
         },

@@ -5,7 +5,8 @@ two step halves, the 12 actuators' kernel and the joint controllers with the cou
 in one call per chunk, so a clock around the call sees only their sum. For ``--profile``,
 :func:`split_simulation_time` times each part alone for a few thousand steps on copies of
 the run's final state — bare ``mj_step``, the kernel, the control step without MuJoCo —
-and shares the measured time of the chunks out in those proportions. The parts are
+and shares the measured time of the chunks out in those proportions
+(``benchmarks/robot_speed.py`` times the same parts). The parts are
 estimates (each timed alone, warm in the cache); what they do not explain (the chunk
 ends: a Python call per chunk and MuJoCo's force stages) is reported as such.
 """
@@ -23,7 +24,8 @@ from pneumaquad.io.stage_clock import StageClock
 from .coupling import robot_control_step
 from .simulation import RobotSimulation
 
-__all__ = ["split_simulation_time"]
+__all__ = ["bare_mujoco_seconds", "control_step_seconds", "kernel_seconds",
+           "split_simulation_time"]
 
 
 @compiled
@@ -45,16 +47,21 @@ def _control_loop(count, mujoco_arrays, cylinders, actuators, controllers, trace
                            settings)
 
 
-def _per_step_seconds(simulation: RobotSimulation, steps: int) -> tuple[float, float, float]:
-    """Seconds per control step of bare MuJoCo, of the kernel and of the control step
-    without MuJoCo, each timed alone on copies of the simulation's state."""
+def bare_mujoco_seconds(simulation: RobotSimulation, steps: int,
+                        data: mujoco.MjData | None = None) -> float:
+    """Seconds per control step of bare ``mj_step`` (its physics steps), run on a copy of
+    ``data`` (default: the simulation's own: same pose, contacts and motor forces)."""
     model = simulation.model
-    data = mujoco.MjData(model)
-    mujoco.mj_copyData(data, model, simulation.data)
+    copy = mujoco.MjData(model)
+    mujoco.mj_copyData(copy, model, simulation.data if data is None else data)
     begun = time.perf_counter()
-    mujoco.mj_step(model, data, nstep=steps * simulation.physics_steps)
-    bare = (time.perf_counter() - begun) / steps
+    mujoco.mj_step(model, copy, nstep=steps * simulation.physics_steps)
+    return (time.perf_counter() - begun) / steps
 
+
+def kernel_seconds(simulation: RobotSimulation, steps: int) -> float:
+    """Seconds per control step of the actuators' kernel alone, as the control step calls
+    it, on copies of the simulation's actuator arrays."""
     state, supply = simulation.state.copy(), simulation.supply.copy()
     outputs, commands = simulation.outputs.copy(), simulation.commands.copy()
     positions, velocities = simulation.positions.copy(), simulation.velocities.copy()
@@ -63,8 +70,12 @@ def _per_step_seconds(simulation: RobotSimulation, steps: int) -> tuple[float, f
     _kernel_loop(1, *arguments)  # load the compiled code
     begun = time.perf_counter()
     _kernel_loop(steps, *arguments)
-    kernel = (time.perf_counter() - begun) / steps
+    return (time.perf_counter() - begun) / steps
 
+
+def control_step_seconds(simulation: RobotSimulation, steps: int) -> float:
+    """Seconds per control step without MuJoCo's step (kernel, controllers, coupling), on
+    copies of the simulation's arrays (its state is left as is)."""
     bundles = [bundle._make(array.copy() for array in bundle) for bundle in (
         simulation.mujoco, simulation.cylinders, simulation.actuators, simulation.controllers,
         simulation.trace)]
@@ -73,8 +84,7 @@ def _per_step_seconds(simulation: RobotSimulation, steps: int) -> tuple[float, f
     _control_loop(1, *bundles, coupling, simulation.step_settings)
     begun = time.perf_counter()
     _control_loop(steps, *bundles, coupling, simulation.step_settings)
-    control = (time.perf_counter() - begun) / steps
-    return bare, kernel, control
+    return (time.perf_counter() - begun) / steps
 
 
 def split_simulation_time(simulation: RobotSimulation, clock: StageClock,
@@ -98,9 +108,11 @@ def split_simulation_time(simulation: RobotSimulation, clock: StageClock,
     measured = clock.seconds.get("simulation", 0.0)
     if measured <= 0.0 or control_steps <= 0:
         return
-    bare, kernel, control = _per_step_seconds(simulation, calibration_steps)
-    parts = {"MuJoCo": bare, "actuators": kernel,
-             "controllers and coupling": max(control - kernel, 0.0)}
+    kernel = kernel_seconds(simulation, calibration_steps)
+    parts = {"MuJoCo": bare_mujoco_seconds(simulation, calibration_steps),
+             "actuators": kernel,
+             "controllers and coupling": max(
+                 control_step_seconds(simulation, calibration_steps) - kernel, 0.0)}
     estimated = {name: seconds * control_steps for name, seconds in parts.items()}
     scale = min(1.0, measured / sum(estimated.values()))  # never more than was measured
     for name, seconds in estimated.items():
