@@ -2,10 +2,10 @@
 
 Every experiment writes a run folder (see :mod:`pneumaquad.robot.experiment`), prints
 its key figures, and optionally renders a video offscreen. The video is rendered by a
-separate process (:mod:`pneumaquad.robot.video_worker`) started with the command: fed the
-recorded samples while the run goes where the run takes an ``on_sample`` hook, else given
-``trajectory.npz`` when the run ends; either way it works beside the plots and the command
-waits for it at the end. Without a video the worker writes only ``first-frame.png``.
+separate process (:mod:`pneumaquad.robot.video_worker`) started with the command and fed
+the recorded samples while the run goes (the runs' ``on_sample`` hook); it works on beside
+the plots and the command waits for it at the end. Without a video the worker writes only
+``first-frame.png``, from ``trajectory.npz`` once the run has ended.
 """
 
 from __future__ import annotations
@@ -91,18 +91,16 @@ VideoQualityOption = Annotated[
 ]
 
 
-def _simulation(params: str, overrides: list[str] | None, configuration: str,
-                environment: str = "flat", seed: int = 0, supply: str | None = None,
-                clock: StageClock | None = None):
+def _simulation(clock: StageClock, params: str, overrides: list[str] | None,
+                configuration: str, environment: str = "flat", seed: int = 0,
+                supply: str | None = None):
     from pneumaquad.robot.builder import build_robot
     from pneumaquad.robot.simulation import RobotSimulation
 
-    begun = clock.elapsed() if clock is not None else 0.0
-    robot = build_robot(load_robot(params, overrides or []), configuration, environment, seed)
-    simulation = RobotSimulation(robot, supply=supply)
-    if clock is not None:
-        clock.add("model (parameters, MuJoCo model, actuator bank)", clock.elapsed() - begun)
-    return simulation
+    with clock.stage("model (parameters, MuJoCo model, actuator bank)"):
+        robot = build_robot(load_robot(params, overrides or []), configuration, environment,
+                            seed)
+        return RobotSimulation(robot, supply=supply)
 
 
 def _progress(update: Callable[[int, int], None]) -> Callable[[float, float], None]:
@@ -283,7 +281,7 @@ def leg_validate(
         for kind in signals:
             worker = _start_video(video, video_fps, video_quality)
             with worker or contextlib.nullcontext():
-                simulation = _simulation(params, overrides, "fixed", clock=clock)
+                simulation = _simulation(clock, params, overrides, "fixed")
                 phases = leg_validation_phases(simulation, tested, kind, settle)
                 folder = base / f"{tested}-{kind}" if several else output
                 _run(simulation, phases, folder, f"leg-{tested}-{kind}",
@@ -319,7 +317,7 @@ def leg_foot_cycle(
                                  param_hint="--rate")
     settings = [*(overrides or []), f"controller.alpha.gain_scale={alpha_gain_scale!r}"]
     with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
-        simulation = _simulation(params, settings, "fixed", clock=clock)
+        simulation = _simulation(clock, params, settings, "fixed")
         phases = foot_cycle_phases(simulation, rates, cycles)
         _run(simulation, phases, output, f"foot-cycle-{rate}",
              f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", worker, video, clock,
@@ -359,8 +357,8 @@ def robot_stand(
                                  param_hint="--configuration")
     _check_environment(environment)
     with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
-        simulation = _simulation(params, overrides, configuration, environment, seed, supply,
-                                 clock)
+        simulation = _simulation(clock, params, overrides, configuration, environment, seed,
+                                 supply)
         phases = stand_up_phases(simulation, hold=hold, posture=posture)
         _run(simulation, phases, output, f"{configuration}-stand",
              f"{configuration}: stand up and hold", worker, video, clock, profile)
@@ -393,8 +391,8 @@ def robot_walk(
             f"walking {distance:g} m at {speed:g} m/s takes {distance / speed:.4g} s; expected "
             f"at most {MAX_SIMULATED_TIME:g} s of walking", param_hint="--distance / --speed")
     with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
-        simulation = _simulation(params, overrides, "quadruped", environment, seed,
-                                 clock=clock)
+        simulation = _simulation(clock, params, overrides, "quadruped", environment,
+                                 seed)
         kind = f"walk-{environment}"
         try:
             with progress_bar(kind) as update:
