@@ -2,17 +2,19 @@
 
 Drives :class:`pneumaquad.console.app.ConsoleApp` headless and unpaced (no browser): the
 free quadruped on flat ground from the console's reset pose, 0.5 s to settle, then the
-automatic walking mode straight ahead (heading 0) for ``--duration`` seconds, one 20 ms
+automatic walking mode (straight ahead unless ``--heading``) for ``--duration`` seconds, one 20 ms
 chunk at a time as the console's thread steps it. After every chunk it reads what the
 console shows: the loaded-feet static stability margin (feet with a normal force above
 1 N) and the thorax pose.
 
     .venv/bin/python docs/examples/console_walk.py --speed 15 --speed 30
     .venv/bin/python docs/examples/console_walk.py --speed 15 --stance position
+    .venv/bin/python docs/examples/console_walk.py --speed 15 --heading 90
 
-Prints per run: the thorax's straight-line distance and its forward (x) and sideways (y)
-travel, the largest |yaw| and the final yaw, steps taken, chunks with a refused lift, the
-mean and lowest thorax height, the fraction of chunks whose loaded-feet margin is negative
+Prints per run: the thorax's straight-line distance, its travel along the heading and its
+forward (x) and sideways (y) travel, the largest |yaw| and the final yaw, steps taken,
+chunks with a refused lift, the mean and lowest thorax height, the fraction of chunks whose
+loaded-feet margin is negative
 (and those with no loaded foot), whether the thorax fell below 0.25 m, and the wall time
 spent in the console's chunks (stepping and refreshing the scene and panels, as the
 unpaced console's thread does).
@@ -38,8 +40,9 @@ SETTLE_CHUNKS = 25  # 0.5 s of 20 ms chunks before walking starts
 FALLEN_HEIGHT = 0.25  # thorax height [m] below which the robot counts as fallen
 
 
-def walk(speed: float, duration: float, stance: str) -> dict[str, float]:
-    """One automatic walk at ``speed`` [m/s]; the measured figures."""
+def walk(speed: float, duration: float, stance: str, heading: float = 0.0
+         ) -> dict[str, float]:
+    """One automatic walk at ``speed`` [m/s] and ``heading`` [rad]; the measured figures."""
     app = ConsoleApp(configuration="quadruped", environment="flat", port=0, real_time=False)
     try:
         if stance == "position":
@@ -49,7 +52,7 @@ def walk(speed: float, duration: float, stance: str) -> dict[str, float]:
         for _ in range(SETTLE_CHUNKS):
             app.advance()
         start = simulation.data.xpos[thorax].copy()
-        app.set_walking("automatic", speed=speed, heading=0.0)
+        app.set_walking("automatic", speed=speed, heading=heading)
         chunks = round(duration / (app.chunk_steps * simulation.control_step))
         margins, yaws, heights, refusals = [], [], [], 0
         wall = 0.0
@@ -69,6 +72,8 @@ def walk(speed: float, duration: float, stance: str) -> dict[str, float]:
         return {
             "simulated [s]": len(margins) * app.chunk_steps * simulation.control_step,
             "straight-line distance [m]": float(np.hypot(*(end[:2] - start[:2]))),
+            "along the heading [m]": float((end[:2] - start[:2])
+                                           @ [math.cos(heading), math.sin(heading)]),
             "forward x [m]": end[0] - start[0],
             "sideways y [m]": end[1] - start[1],
             "max |yaw| [deg]": float(np.max(np.abs(yaws))),
@@ -96,6 +101,8 @@ def main() -> None:
         help="commanded body speed [mm/s], repeatable (default 15 and 30)",
     )
     parser.add_argument("--duration", type=float, default=30.0, help="walking time [s]")
+    parser.add_argument("--heading", type=float, default=0.0,
+                        help="walking direction [deg], counter-clockwise from forward")
     parser.add_argument(
         "--stance",
         choices=("force", "position"),
@@ -104,8 +111,8 @@ def main() -> None:
     )
     args = parser.parse_args()
     for speed in args.speed or [15.0, 30.0]:
-        figures = walk(speed / 1000.0, args.duration, args.stance)
-        print(f"{speed:g} mm/s, {args.stance} stance:")
+        figures = walk(speed / 1000.0, args.duration, args.stance, math.radians(args.heading))
+        print(f"{speed:g} mm/s, heading {args.heading:g}°, {args.stance} stance:")
         for name, value in figures.items():
             if isinstance(value, float) and not math.isnan(value):
                 print(f"  {name}: {value:.3f}")

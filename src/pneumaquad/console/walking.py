@@ -17,8 +17,13 @@ joints through the leg IK (clamped into the limits) and, like the CLI walk, sets
 stance legs' cylinders to carry their statics share of the weight
 (:func:`pneumaquad.locomotion.stance_control.track_stance_loads` with the crawl's
 :meth:`~pneumaquad.gait.online.OnlineCrawl.load_shares`: a leg sheds its load before it
-lifts). The feet are planned in world-aligned axes and turned into the body frame with
-the thorax's measured yaw.
+lifts). The feet are planned in the *walking frame*: world axes turned by the thorax's
+yaw when walking began. The body is commanded to keep that yaw: the feet's targets relative
+to the planned body are given to the legs in that frame, not in the measured one, so a body
+that has turned has its stance feet (held by the ground) commanded where they would be
+without the turn, and the legs' joint controllers turn it back. Turning the targets with the
+measured yaw instead (as this module did before) leaves nothing that restores the heading:
+walking straight ahead for 30 s, the body turned by 30–43°.
 """
 
 from __future__ import annotations
@@ -97,6 +102,8 @@ class ConsoleWalking:
         self.speed = 0.0
         self.heading = 0.0
         self.crawl: OnlineCrawl | None = None
+        #: World → walking frame (2×2): the world axes turned by the yaw held while walking.
+        self.to_frame = np.eye(2)
         self.message = ""
         if self.available:
             self.tables = [leg_dh_table(robot, leg) for leg in robot.legs]
@@ -118,9 +125,12 @@ class ConsoleWalking:
             simulation = self.simulation
             robot = simulation.robot
             neutral = standing_feet(robot, WALKING_ANGLES)
-            thorax = simulation.data.xpos[robot.thorax_id][:2].copy()
-            com = centre_of_mass(simulation.model, simulation.data) - thorax
-            feet = simulation.foot_positions()[:, :2]
+            yaw = self._yaw()
+            cos, sin = math.cos(yaw), math.sin(yaw)
+            self.to_frame = np.array([[cos, sin], [-sin, cos]])
+            thorax = self._in_frame(simulation.data.xpos[robot.thorax_id])
+            com = self._in_frame(centre_of_mass(simulation.model, simulation.data)) - thorax
+            feet = self._in_frame(simulation.foot_positions())
             self.crawl = OnlineCrawl(neutral, com, thorax, self.settings, footholds=feet)
         self.crawl.shared = mode == "shared"
         self.command(self.speed, self.heading)
@@ -132,9 +142,13 @@ class ConsoleWalking:
         if self.crawl is not None:
             self.crawl.command_velocity(self.speed, self.heading)
 
+    def _in_frame(self, points: np.ndarray) -> np.ndarray:
+        """xy [m] in the walking frame of world points (..., ≥2) [m]."""
+        return np.asarray(points)[..., :2] @ self.to_frame.T
+
     def footholds_from_targets(self, targets: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """World xy [m] of foot targets given in the thorax frame [m], taken relative to
-        the crawl's planned body (not the measured thorax, whose sway and sag would move
+        """Walking-frame xy [m] of foot targets given in the thorax frame [m], taken
+        relative to the crawl's planned body (not the measured thorax, whose sway and sag would move
         the operator's footholds with it)."""
         if self.crawl is None:
             return {}
@@ -160,14 +174,12 @@ class ConsoleWalking:
         simulation = self.simulation
         allowed = True
         if crawl.phase == "shift" and crawl.clock + interval >= crawl.settings.shift_time:
-            feet = simulation.foot_positions()[:, :2]
-            com = centre_of_mass(simulation.model, simulation.data)
+            feet = self._in_frame(simulation.foot_positions())
+            com = self._in_frame(centre_of_mass(simulation.model, simulation.data))
             allowed = not refuse_lift(feet, crawl.stance(), LEGS.index(crawl.leg), com)
         crawl.advance(interval, allowed)
-        yaw = self._yaw()
-        cos, sin = math.cos(yaw), math.sin(yaw)
-        world_to_body = np.array([[cos, sin, 0.0], [-sin, cos, 0.0], [0.0, 0.0, 1.0]])
-        feet_body = crawl.feet_relative() @ world_to_body.T
+        # The walking frame is the body frame the crawl commands (the heading held).
+        feet_body = crawl.feet_relative()
         angles = simulation.reference_angles.copy()
         for k, table in enumerate(self.tables):
             target = self.to_thorax @ feet_body[k]
