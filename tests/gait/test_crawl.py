@@ -164,3 +164,46 @@ def test_refuse_lift_keeps_the_centre_of_mass_supported():
     three = stance.copy()
     three[LEGS.index("rear_left")] = False
     assert refuse_lift(feet, three, LEGS.index("front_left"), right)  # two feet: a line
+
+
+def test_the_gait_roles_follow_the_direction_of_travel():
+    """Walking sideways, "rear" and "front" are the legs behind and ahead along the travel
+    and the body sways across it (along x); forward and backward keep their sequences."""
+    import dataclasses
+    import math
+
+    from pneumaquad.gait.crawl import CrawlGait, sway_axis, swing_order, travel_quarter
+
+    assert [travel_quarter(math.radians(h)) for h in (0, 44, 45, 46, 90, 135, 180, 270, 315)
+            ] == [0, 0, 0, 1, 1, 2, 2, 3, 0]
+    feet = np.array([[0.375, 0.356, -0.38], [0.375, -0.356, -0.38],
+                     [-0.375, 0.356, -0.38], [-0.375, -0.356, -0.38]])
+    forward = CrawlGait(feet, duty_factor=0.9, period=8.0, stride=0.144, heading=0.0)
+    assert swing_order(forward) == ("rear_left", "front_left", "rear_right", "front_right")
+    assert sway_axis(forward) == 1
+    left = dataclasses.replace(forward, heading=math.pi / 2)  # travel along +y
+    # behind the travel: the right legs; on its left: the rear legs
+    assert swing_order(left) == ("rear_right", "rear_left", "front_right", "front_left")
+    assert sway_axis(left) == 0
+    right = dataclasses.replace(forward, heading=-math.pi / 2)
+    assert swing_order(right) == ("front_left", "front_right", "rear_left", "rear_right")
+    # a sideways body sways along x only; its travel is along y
+    from pneumaquad.gait.crawl import body_positions
+
+    times = np.linspace(0.0, 8.0, 81)
+    path = body_positions(left, times)
+    assert np.ptp(path[:, 0]) > 0.02  # sway across the travel
+    assert path[:, 1] == pytest.approx(left.speed * times)
+
+
+def test_a_sideways_plan_keeps_its_static_margin():
+    import math
+
+    from pneumaquad.gait.crawl import CrawlGait, plan_margins, sway_for_margin
+
+    feet = np.array([[0.375, 0.356, -0.38], [0.375, -0.356, -0.38],
+                     [-0.375, 0.356, -0.38], [-0.375, -0.356, -0.38]])
+    gait = sway_for_margin(CrawlGait(feet, duty_factor=0.9, period=8.0, stride=0.144,
+                                     heading=math.pi / 2, transfer_gap=0.04), 0.06)
+    _, margins = plan_margins(gait)
+    assert margins.min() >= 0.06 - 1e-6

@@ -36,3 +36,22 @@ def test_the_quadruped_walks_the_terrain(tmp_path: Path, environment: str,
     assert outcome["success"], outcome
     assert outcome["time with negative tip-over margin [%]"] < 1.0
     assert outcome["air per metre [NL/m]"] < 10.0  # measured 6.1-6.5 NL/m
+    # the walk ends where asked, within one stride (speed x duty factor x period)
+    assert abs(outcome["distance error [m]"]) <= outcome["stride [m]"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("heading", [90.0, 180.0, 270.0])
+def test_the_quadruped_walks_every_heading(tmp_path: Path, heading: float) -> None:
+    """Sideways and backwards at the default speed: the gait's roles and posture follow
+    the heading (gait.crawl.travel_quarter, locomotion.reach.choose_posture)."""
+    import math
+
+    robot = build_robot(load_robot("crr-quadruped"), "quadruped", environment="flat")
+    sim = RobotSimulation(robot)
+    settings = WalkSettings(distance=0.5, heading=math.radians(heading))
+    phases, _ = walking_phases(sim, settings)
+    run = run_phases(sim, phases, tmp_path, f"walk-{heading:g}")
+    outcome = walking_outcome(run.recording, run.summary, settings, robot)
+    assert outcome["success"], outcome
+    assert abs(outcome["distance error [m]"]) <= outcome["stride [m]"]

@@ -18,6 +18,13 @@ force-controlled stance can move the load off the front leg before it lifts (wit
 it, the load jumps from the front leg to the rear one at the instant of lift-off).
 Walking backwards (|heading| > 90°) swaps the roles of front and rear legs.
 
+The roles follow the direction of travel: a heading nearer to sideways than to forward or
+backward (|sin| > |cos|) turns the gait by a quarter, so that "rear" and "front" are the
+legs behind and ahead along the travel and the sway is along the body's x axis, across the
+travel (:func:`travel_quarter`). Without it, a sideways walk swings its legs in the
+forward sequence and sways the body along its own travel, and the legs run out of reach
+(heading 90° at the default stride: 296 of 800 IK samples beyond a joint limit).
+
 Frames: the *body frame* has x forward, y left, z up, origin at the thorax origin, axes
 fixed to the body (which does not turn). The *ground frame* is the body frame at t = 0
 without sway, fixed to the ground. Feet stand still in the ground frame during stance;
@@ -43,15 +50,18 @@ __all__ = [
     "body_positions",
     "foot_positions_ground",
     "foot_targets",
+    "gait_offsets",
     "leg_phases",
     "lift_off_offsets",
     "margin_after_lift",
     "plan_margins",
     "refuse_lift",
     "stance_flags",
+    "sway_axis",
     "sway_for_margin",
     "sway_shifts",
     "swing_order",
+    "travel_quarter",
 ]
 
 Array = NDArray[np.float64]
@@ -149,9 +159,45 @@ def lift_off_offsets(duty_factor: float, backward: bool = False,
     return np.array([front_left, front_right, rear_left, rear_right])
 
 
-def _offsets(gait: CrawlGait) -> Array:
-    return lift_off_offsets(gait.duty_factor, backward=math.cos(gait.heading) < 0.0,
-                            transfer_gap=gait.transfer_gap)
+def travel_quarter(heading: float) -> int:
+    """Quarter turn (0 forward, 1 left, 2 backward, 3 right) nearest to ``heading`` [rad]:
+    the body axis the gait's roles are taken along. Diagonals (|sin| = |cos|) count as
+    forward or backward."""
+    cos, sin = math.cos(heading), math.sin(heading)
+    if abs(sin) > abs(cos) + 1e-9:  # 135° is a tie, not 1e-16 more sideways
+        return 1 if sin > 0.0 else 3
+    return 0 if cos >= 0.0 else 2
+
+
+#: Legs in the roles (rear_left, front_left, rear_right, front_right) of the forward
+#: sequence when the travel is along +y (quarter 1) or −y (quarter 3): the legs behind
+#: and ahead, on the left and the right, of the direction of travel.
+_SIDEWAYS_ROLES = {
+    1: ("rear_right", "rear_left", "front_right", "front_left"),
+    3: ("front_left", "front_right", "rear_left", "rear_right"),
+}
+
+
+def gait_offsets(gait: CrawlGait) -> Array:
+    """Lift-off of each leg (:data:`LEGS` order) [cycle fraction] for the gait's heading
+    (:func:`lift_off_offsets` with the roles of :func:`travel_quarter`)."""
+    quarter = travel_quarter(gait.heading)
+    if quarter in (0, 2):
+        return lift_off_offsets(gait.duty_factor, backward=quarter == 2,
+                                transfer_gap=gait.transfer_gap)
+    forward = lift_off_offsets(gait.duty_factor, transfer_gap=gait.transfer_gap)
+    offsets = np.empty(len(LEGS))
+    for role, leg in zip(LATERAL_SEQUENCE, _SIDEWAYS_ROLES[quarter], strict=True):
+        offsets[LEGS.index(leg)] = forward[LEGS.index(role)]
+    return offsets
+
+
+def sway_axis(gait: CrawlGait) -> int:
+    """Body axis the sway moves along: 1 (y) walking forward or backward, 0 (x) sideways."""
+    return 0 if travel_quarter(gait.heading) in (1, 3) else 1
+
+
+_offsets = gait_offsets
 
 
 def swing_order(gait: CrawlGait) -> tuple[str, ...]:
@@ -216,7 +262,8 @@ def _incentre(triangle: Array) -> Array:
 
 
 def sway_shifts(gait: CrawlGait) -> Array:
-    """Sideways body shift [m] (body y) while the first and while the second side swings.
+    """Body shift [m] across the travel (along :func:`sway_axis`) while the first and while
+    the second side swings.
 
     For each swing, the incentre of the support triangle of the other three feet at
     mid-swing (planned without sway); a side's shift puts the centre of mass over the
@@ -224,6 +271,7 @@ def sway_shifts(gait: CrawlGait) -> Array:
     """
     still = dataclasses.replace(gait, sway=0.0, start_up=False)  # a steady cycle
     offsets = _offsets(gait)
+    axis = sway_axis(gait)
     swing = 1.0 - gait.duty_factor
     shifts = np.zeros(2)
     for side, first in enumerate((0.0, 0.5)):
@@ -232,8 +280,8 @@ def sway_shifts(gait: CrawlGait) -> Array:
             time = (start + 0.5 * swing) * gait.period
             leg = int(np.argmin(np.abs(offsets - start)))
             feet = foot_targets(still, np.array([time]))[0, :, :2]
-            lateral.append(_incentre(np.delete(feet, leg, axis=0))[1])
-        shifts[side] = gait.sway * (np.mean(lateral) - gait.com_offset[1])
+            lateral.append(_incentre(np.delete(feet, leg, axis=0))[axis])
+        shifts[side] = gait.sway * (np.mean(lateral) - gait.com_offset[axis])
     return shifts
 
 
@@ -253,7 +301,7 @@ def body_positions(gait: CrawlGait, times: ArrayLike) -> Array:
     """Body origin (n, 2) [m] in the ground frame: travel at ``gait.speed`` plus sway."""
     times = np.asarray(times, dtype=float)
     position = gait.speed * times[..., None] * gait.direction
-    position[..., 1] += _lateral_sway(gait, times)
+    position[..., sway_axis(gait)] += _lateral_sway(gait, times)
     return position
 
 

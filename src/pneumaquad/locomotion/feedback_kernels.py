@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from pneumaquad.core.jit import compiled
-from pneumaquad.gait.crawl import _PHASE_TOLERANCE, CrawlGait, lift_off_offsets
+from pneumaquad.gait.crawl import _PHASE_TOLERANCE, CrawlGait, gait_offsets
 from pneumaquad.robot.kinematics import ChainWorkspace, LegTables
 from pneumaquad.robot.legs import add_leg_step, middle_leg_chain
 
@@ -51,8 +51,7 @@ class GaitTiming(NamedTuple):
 def gait_timing(gait: CrawlGait) -> GaitTiming:
     """The :class:`GaitTiming` of ``gait`` (its lift-off offsets as the gait computes
     them)."""
-    offsets = lift_off_offsets(gait.duty_factor, backward=math.cos(gait.heading) < 0.0,
-                               transfer_gap=gait.transfer_gap)
+    offsets = gait_offsets(gait)
     return GaitTiming(float(gait.period), float(gait.duty_factor), float(gait.step_height),
                       float(gait.lift_fraction), float(_PHASE_TOLERANCE),
                       np.ascontiguousarray(offsets, dtype=float))

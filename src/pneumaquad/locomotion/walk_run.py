@@ -28,10 +28,12 @@ from pneumaquad.reporting.robot_plots import plot_walking
 from pneumaquad.robot.experiment import Phase, RobotRun, run_phases
 from pneumaquad.robot.simulation import RobotSimulation
 
+from .reach import UnreachablePlanError
 from .walk import WalkPlan
 from .walking import WalkSettings, tip_over_series, walking_outcome, walking_phases
 
-__all__ = ["GAIT_FIELDS", "WALKING_FIGURE", "WALK_SETTINGS", "JudgedWalk", "WalkSettingsError",
+__all__ = ["GAIT_FIELDS", "REACH_FIELDS", "WALKING_FIGURE", "WALK_SETTINGS", "JudgedWalk",
+           "WalkSettingsError",
            "check_walk_settings", "plan_walking", "run_walk"]
 
 #: The walking figure of a judged walk's run folder.
@@ -72,6 +74,8 @@ WALK_SETTINGS: dict[str, Setting] = {
 #: The settings the gait's own checks (:class:`pneumaquad.gait.crawl.CrawlGait`,
 #: :func:`pneumaquad.gait.crawl.sway_for_margin`) weigh against each other.
 GAIT_FIELDS = ("duty_factor", "lift_fraction", "transfer_gap", "minimum_margin")
+#: The settings that decide whether the legs reach the plan (:mod:`.reach`).
+REACH_FIELDS = ("heading", "speed", "period", "step_height")
 
 
 class WalkSettingsError(ValueError):
@@ -139,12 +143,18 @@ def plan_walking(simulation: RobotSimulation,
     Raises
     ------
     WalkSettingsError
-        For a field out of range, or settings the gait refuses (its message, with the
-        values of :data:`GAIT_FIELDS`).
+        For a field out of range, settings the gait refuses (its message, with the
+        values of :data:`GAIT_FIELDS`), or a plan the legs cannot reach (the leg, its
+        phase and the joint limit; :data:`REACH_FIELDS`).
     """
     check_walk_settings(settings)
     try:
         return walking_phases(simulation, settings)
+    except UnreachablePlanError as error:
+        raise WalkSettingsError(
+            f"the legs cannot walk heading {math.degrees(settings.heading):g}° at "
+            f"{settings.speed:g} m/s with a {settings.period:g} s cycle and a "
+            f"{settings.step_height:g} m step: {error}", REACH_FIELDS) from None
     except ValueError as error:
         raise WalkSettingsError(
             f"the gait cannot be planned with duty factor {settings.duty_factor:g}, lift "

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from pneumaquad.gait.crawl import CrawlGait
 from pneumaquad.gait.settings import CrawlSettings
 from pneumaquad.gait.stability import STANCE_FORCE, support_margins
 from pneumaquad.locomotion.walk import WalkPlan, plan_walk, robot_gait
@@ -26,6 +27,7 @@ from pneumaquad.robot.scenarios import stand_up_phases
 from pneumaquad.robot.simulation import RobotSimulation
 
 from .heading_control import HeadingHold
+from .reach import check_reach, choose_posture
 from .stance_control import StanceController, StanceControlSettings
 from .swing_control import SwingHeightCorrection
 
@@ -61,31 +63,51 @@ class WalkSettings(CrawlSettings):
     heading_hold: bool = True
 
     def duration(self) -> float:
-        """Walking time [s] for the distance, in whole gait cycles."""
-        cycles = max(1, math.ceil(self.distance / (self.speed * self.period)))
+        """Walking time [s]: the whole number of gait cycles (at least one) whose planned
+        body travel is nearest to the distance. A walk ends as it began, on four feet
+        with the body swayed to the same side, within half a cycle's travel
+        (speed·T/2, less than a stride) of the distance."""
+        cycles = max(1, round(self.distance / (self.speed * self.period)))
         return cycles * self.period
 
 
 def walking_phases(
     simulation: RobotSimulation, settings: WalkSettings
 ) -> tuple[list[Phase], WalkPlan]:
-    """Stand up into the gait's first pose, walk, stop; returns the phases and the plan."""
+    """Stand up into the gait's first pose, walk, stop; returns the phases and the plan.
+
+    The gait is planned about :data:`WALKING_ANGLES`, or about another posture where the
+    legs cannot reach that plan (:func:`.reach.choose_posture`, e.g. walking sideways).
+
+    Raises
+    ------
+    UnreachablePlanError
+        When the legs cannot reach the plan about any posture (:func:`.reach.check_reach`:
+        the leg, its phase and the joint limit).
+    ValueError
+        Settings the gait refuses (:class:`pneumaquad.gait.crawl.CrawlGait`).
+    """
     robot = simulation.robot
-    gait = robot_gait(
-        robot,
-        speed=settings.speed,
-        heading=settings.heading,
-        duty_factor=settings.duty_factor,
-        period=settings.period,
-        step_height=settings.step_height,
-        angles=WALKING_ANGLES,
-        minimum_margin=settings.minimum_margin,
-        lift_fraction=settings.lift_fraction,
-        transfer_gap=settings.transfer_gap,
-        start_up=True,
-    )
+
+    def gait_for(angles: np.ndarray) -> CrawlGait:
+        return robot_gait(
+            robot,
+            speed=settings.speed,
+            heading=settings.heading,
+            duty_factor=settings.duty_factor,
+            period=settings.period,
+            step_height=settings.step_height,
+            angles=angles,
+            minimum_margin=settings.minimum_margin,
+            lift_fraction=settings.lift_fraction,
+            transfer_gap=settings.transfer_gap,
+            start_up=True,
+        )
+
+    gait = gait_for(choose_posture(robot, gait_for, WALKING_ANGLES))
     duration = settings.duration()
     plan = plan_walk(robot, gait, duration)
+    check_reach(robot, gait, plan.cycle, plan.start_up)
     closed = np.ones(robot.joint_count, dtype=bool)
     # Stand up straight into the gait's first pose, the symmetric stance of its start-up
     # (a separate move from a standing pose to the walking pose dragged the feet).
@@ -183,7 +205,9 @@ def walking_outcome(
     within 0.5° of a limit for more than 20 % of the walk; the run succeeds when none of
     these happened and the thorax travelled at least 90 % of the distance along the
     heading (**too slow** otherwise, listed with the other reasons: a robot stalled at an
-    obstacle is too slow whatever else happened).
+    obstacle is too slow whatever else happened) and not more than one stride beyond it
+    (**overshot**). The outcome gives the distance error (travelled − asked) and the
+    stride (speed·β·T) it is judged against.
 
     With ``tip_over`` (:func:`tip_over_series` of the run: the margin in the support of
     the feet the gait holds down, loaded or not) it is reported beside the loaded-feet
@@ -253,8 +277,13 @@ def walking_outcome(
         "joints at a limit": at_limit,
         "air per metre [NL/m]": air / travelled if travelled > 0 else math.nan,
     }
+    stride = settings.speed * settings.duty_factor * settings.period
+    outcome["distance error [m]"] = travelled - settings.distance
+    outcome["stride [m]"] = stride
     if travelled < 0.9 * settings.distance:
         reasons.append("too slow")
+    elif travelled > settings.distance + stride:
+        reasons.append("overshot")
     outcome["success"] = not reasons
     outcome["reasons"] = reasons or ["reached the distance"]
     return outcome
