@@ -117,7 +117,12 @@ def tripod_loads(recording: dict[str, np.ndarray], summary: dict[str, Any],
 def walk_once(name: str, speed: float, output: Path) -> dict[str, Any]:
     """One 0.5 m flat walk of setting ``name`` at ``speed`` [m/s]; its figures."""
     setting = SETTINGS[name]
-    settings = WalkSettings(speed=speed, distance=DISTANCE, stance_control=setting["stance"],
+    # Walk whole cycles covering at least DISTANCE (the table's walks: 1.2-1.28 x 0.5 m;
+    # WalkSettings.duration() would take the nearest whole number of cycles instead).
+    cycle = speed * setting["walk"].get("period", WalkSettings().period)
+    planned_distance = math.ceil(DISTANCE / cycle - 1e-9) * cycle
+    settings = WalkSettings(speed=speed, distance=planned_distance,
+                            stance_control=setting["stance"],
                             **setting["walk"])
     robot = build_robot(load_robot("crr-quadruped", setting["overrides"]), "quadruped",
                         environment="flat")

@@ -203,9 +203,10 @@ def walking_outcome(
     :func:`contact_slide`; the path length of loaded feet, which also counts sub-millimetre
     contact jitter, is reported beside it); **joint limit** — a joint
     within 0.5° of a limit for more than 20 % of the walk; the run succeeds when none of
-    these happened and the thorax travelled at least 90 % of the distance along the
-    heading (**too slow** otherwise, listed with the other reasons: a robot stalled at an
-    obstacle is too slow whatever else happened) and not more than one stride beyond it
+    these happened and the thorax travelled at least 90 % of the planned travel (the whole
+    cycles of :meth:`WalkSettings.duration`) along the heading (**too slow** otherwise,
+    listed with the other reasons: a robot stalled at an obstacle is too slow whatever else
+    happened) and not more than one stride beyond it
     (**overshot**). The outcome gives the distance error (travelled − asked) and the
     stride (speed·β·T) it is judged against.
 
@@ -278,9 +279,11 @@ def walking_outcome(
         "air per metre [NL/m]": air / travelled if travelled > 0 else math.nan,
     }
     stride = settings.speed * settings.duty_factor * settings.period
+    planned = settings.duration() * settings.speed
+    outcome["planned travel [m]"] = planned
     outcome["distance error [m]"] = travelled - settings.distance
     outcome["stride [m]"] = stride
-    if travelled < 0.9 * settings.distance:
+    if travelled < 0.9 * planned:
         reasons.append("too slow")
     elif travelled > settings.distance + stride:
         reasons.append("overshot")
