@@ -16,9 +16,9 @@ from pneumaquad.locomotion.reach import (
     choose_posture,
     largest_miss,
 )
-from pneumaquad.locomotion.walk import plan_walk, robot_gait, solve_cycle
+from pneumaquad.locomotion.walk import plan_walk, solve_cycle
 from pneumaquad.locomotion.walk_run import WalkSettingsError, plan_walking
-from pneumaquad.locomotion.walking import WALKING_ANGLES, WalkSettings
+from pneumaquad.locomotion.walking import WALKING_ANGLES, WalkSettings, walking_gait
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.kinematics import forward_kinematics_dh
@@ -33,15 +33,7 @@ def robot():
 
 def _gait_for(robot, heading_degrees: float, **changes):
     settings = WalkSettings(heading=math.radians(heading_degrees), **changes)
-
-    def gait_for(angles):
-        return robot_gait(robot, speed=settings.speed, heading=settings.heading,
-                          duty_factor=settings.duty_factor, period=settings.period,
-                          step_height=settings.step_height, angles=angles,
-                          minimum_margin=settings.minimum_margin,
-                          lift_fraction=settings.lift_fraction,
-                          transfer_gap=settings.transfer_gap, start_up=True)
-    return gait_for
+    return lambda angles: walking_gait(robot, settings, angles)
 
 
 def test_the_miss_is_the_distance_from_the_planned_to_the_reached_foot(robot):

@@ -197,17 +197,15 @@ def sway_axis(gait: CrawlGait) -> int:
     return 0 if travel_quarter(gait.heading) in (1, 3) else 1
 
 
-_offsets = gait_offsets
-
 
 def swing_order(gait: CrawlGait) -> tuple[str, ...]:
     """Leg names in the order they swing, starting with the first lift-off of a cycle."""
-    return tuple(LEGS[k] for k in np.argsort(_offsets(gait), kind="stable"))
+    return tuple(LEGS[k] for k in np.argsort(gait_offsets(gait), kind="stable"))
 
 
 def leg_phases(gait: CrawlGait, times: ArrayLike) -> Array:
     """Phase (n, 4) in [0, 1) of each leg since its lift-off, at ``times`` (n,) [s]."""
-    cycles = np.asarray(times, dtype=float)[..., None] / gait.period - _offsets(gait)
+    cycles = np.asarray(times, dtype=float)[..., None] / gait.period - gait_offsets(gait)
     return cycles - np.floor(cycles)
 
 
@@ -222,10 +220,10 @@ def foot_positions_ground(gait: CrawlGait, times: ArrayLike) -> Array:
     """Feet (n, 4, 3) [m] in the ground frame: xy on the ground, z = height above it."""
     times = np.asarray(times, dtype=float)
     swing = 1.0 - gait.duty_factor
-    cycles = times[..., None] / gait.period - _offsets(gait)
+    cycles = times[..., None] / gait.period - gait_offsets(gait)
     count = np.floor(cycles)
     phase = cycles - count
-    touchdown = (count + _offsets(gait) + swing) * gait.period  # of the current cycle
+    touchdown = (count + gait_offsets(gait) + swing) * gait.period  # of the current cycle
     travel = gait.speed * gait.period  # per cycle = stride / β
     along = 0.5 * gait.stride + gait.speed * touchdown  # foothold along the direction
     progress = np.clip(phase / swing, 0.0, 1.0)
@@ -270,7 +268,7 @@ def sway_shifts(gait: CrawlGait) -> Array:
     mean lateral position of its two swings' incentres, times ``gait.sway``.
     """
     still = dataclasses.replace(gait, sway=0.0, start_up=False)  # a steady cycle
-    offsets = _offsets(gait)
+    offsets = gait_offsets(gait)
     axis = sway_axis(gait)
     swing = 1.0 - gait.duty_factor
     shifts = np.zeros(2)

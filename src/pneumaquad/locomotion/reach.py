@@ -21,12 +21,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from pneumaquad.gait.crawl import LEGS, CrawlGait, foot_targets, gait_offsets
+from pneumaquad.gait.crawl import LEGS, CrawlGait, gait_offsets
 from pneumaquad.robot.builder import RobotModel
 from pneumaquad.robot.leg_ik import exact_solutions
 from pneumaquad.robot.legs import leg_dh_table
 
-from .walk import CycleSolution, solve_cycle, thorax_rotation
+from .walk import CycleSolution, cycle_targets, solve_cycle
 
 __all__ = ["POSTURES", "REACH_TOLERANCE", "UnreachablePlanError", "check_reach",
            "choose_posture", "largest_miss"]
@@ -83,12 +83,9 @@ def _unreachable_samples(robot: RobotModel, gait: CrawlGait, samples: int) -> in
     """Planned feet of the steady and the first cycle with no analytic IK answer inside
     the joint limits (no search: cheap enough to compare postures)."""
     tables = [leg_dh_table(robot, leg) for leg in LEGS]
-    to_thorax = thorax_rotation(robot).T
-    phases = np.arange(samples) / samples
     count = 0
     for first in ((False, True) if gait.start_up else (False,)):
-        times = (phases + (0.0 if first else 1.0)) * gait.period
-        targets = foot_targets(gait, times) @ to_thorax.T
+        _, _, targets = cycle_targets(robot, gait, samples, first)
         count += sum(not exact_solutions(table, targets[sample, k])
                      for sample in range(samples) for k, table in enumerate(tables))
     return count

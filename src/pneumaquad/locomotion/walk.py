@@ -32,7 +32,7 @@ from pneumaquad.robot.frames import euler_zyx_matrix, rotation_to_quaternion
 from pneumaquad.robot.legs import leg_dh_table, solve_leg, thorax_frame_points
 from pneumaquad.robot.scenarios import STANDING_ANGLES
 
-__all__ = ["CycleSolution", "WalkPlan", "plan_walk", "robot_gait", "solve_cycle",
+__all__ = ["CycleSolution", "WalkPlan", "cycle_targets", "plan_walk", "robot_gait", "solve_cycle",
            "standing_feet", "thorax_rotation"]
 
 Array = NDArray[np.float64]
@@ -126,16 +126,24 @@ class CycleSolution:
         return {leg: int((~self.reachable[:, k]).sum()) for k, leg in enumerate(LEGS)}
 
 
+def cycle_targets(robot: RobotModel, gait: CrawlGait, samples: int,
+                  first: bool = False) -> tuple[Array, Array, Array]:
+    """The IK grid of one cycle: cycle fractions (samples,), times (samples,) [s] and the
+    planned feet (samples, 4, 3) [m] in the thorax frame, of a steady cycle or, with
+    ``first``, of the gait's first cycle."""
+    phases = np.arange(samples) / samples
+    times = (phases + (0.0 if first else 1.0)) * gait.period
+    return phases, times, foot_targets(gait, times) @ thorax_rotation(robot)
+
+
 def solve_cycle(robot: RobotModel, gait: CrawlGait, samples: int = 200,
                 first: bool = False) -> CycleSolution:
     """Solve the leg IK on ``samples`` instants over one cycle (clamped into the limits):
     a steady cycle, or with ``first`` the gait's first cycle (its start-up, if any)."""
     if tuple(robot.legs) != LEGS:
         raise ValueError(f"the crawl gait needs the legs {LEGS}, the robot has {robot.legs}")
-    phases = np.arange(samples) / samples
-    times = (phases + (0.0 if first else 1.0)) * gait.period
+    phases, times, targets = cycle_targets(robot, gait, samples, first)
     to_thorax = thorax_rotation(robot).T
-    targets = foot_targets(gait, times) @ to_thorax.T
     angles = np.empty((samples, 12))
     feet = np.empty((samples, 4, 3))
     reachable = np.empty((samples, 4), dtype=bool)

@@ -31,8 +31,16 @@ from .reach import check_reach, choose_posture
 from .stance_control import StanceController, StanceControlSettings
 from .swing_control import SwingHeightCorrection
 
-__all__ = ["WALKING_ANGLES", "WalkSettings", "contact_slide", "gait_support_margins",
-           "tip_over_series", "walking_outcome", "walking_phases"]
+__all__ = [
+    "WALKING_ANGLES",
+    "WalkSettings",
+    "contact_slide",
+    "gait_support_margins",
+    "tip_over_series",
+    "walking_gait",
+    "walking_outcome",
+    "walking_phases",
+]
 
 #: Alpha, beta, gamma [rad] the gait is planned about: every IK sample stays reachable
 #: (the standing gamma of 90° is too close to its 95° limit to lift and sway).
@@ -71,6 +79,17 @@ class WalkSettings(CrawlSettings):
         return cycles * self.period
 
 
+def walking_gait(robot: RobotModel, settings: WalkSettings, angles: np.ndarray) -> CrawlGait:
+    """The crawl of ``settings`` for ``robot``, planned about the posture ``angles``
+    (alpha, beta, gamma) [rad], with its start-up cycle."""
+    return robot_gait(robot, speed=settings.speed, heading=settings.heading,
+                      duty_factor=settings.duty_factor, period=settings.period,
+                      step_height=settings.step_height, angles=angles,
+                      minimum_margin=settings.minimum_margin,
+                      lift_fraction=settings.lift_fraction,
+                      transfer_gap=settings.transfer_gap, start_up=True)
+
+
 def walking_phases(
     simulation: RobotSimulation, settings: WalkSettings
 ) -> tuple[list[Phase], WalkPlan]:
@@ -90,19 +109,7 @@ def walking_phases(
     robot = simulation.robot
 
     def gait_for(angles: np.ndarray) -> CrawlGait:
-        return robot_gait(
-            robot,
-            speed=settings.speed,
-            heading=settings.heading,
-            duty_factor=settings.duty_factor,
-            period=settings.period,
-            step_height=settings.step_height,
-            angles=angles,
-            minimum_margin=settings.minimum_margin,
-            lift_fraction=settings.lift_fraction,
-            transfer_gap=settings.transfer_gap,
-            start_up=True,
-        )
+        return walking_gait(robot, settings, angles)
 
     gait = gait_for(choose_posture(robot, gait_for, WALKING_ANGLES))
     duration = settings.duration()
@@ -206,9 +213,9 @@ def walking_outcome(
     these happened and the thorax travelled at least 90 % of the planned travel (the whole
     cycles of :meth:`WalkSettings.duration`) along the heading (**too slow** otherwise,
     listed with the other reasons: a robot stalled at an obstacle is too slow whatever else
-    happened) and not more than one stride beyond it
-    (**overshot**). The outcome gives the distance error (travelled − asked) and the
-    stride (speed·β·T) it is judged against.
+    happened) and not more than one stride beyond the distance asked (**overshot**). The
+    outcome gives the distance error (travelled − asked) and the stride (speed·β·T) it is
+    judged against.
 
     With ``tip_over`` (:func:`tip_over_series` of the run: the margin in the support of
     the feet the gait holds down, loaded or not) it is reported beside the loaded-feet
