@@ -430,6 +430,7 @@ def _register_robot_commands() -> None:
     from pneumaquad.cli.report import report_command
     from pneumaquad.cli.robot import leg_app, robot_app, video_command
     from pneumaquad.cli.serve import serve_app
+    from pneumaquad.cli.study import study_app
 
     app.add_typer(fit_app, name="fit")
     app.command("console")(console_command)
@@ -437,6 +438,7 @@ def _register_robot_commands() -> None:
     app.add_typer(leg_app, name="leg")
     app.add_typer(robot_app, name="robot")
     app.add_typer(serve_app, name="serve")
+    app.add_typer(study_app, name="study")
     app.command("video")(video_command)
 
 

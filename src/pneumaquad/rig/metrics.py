@@ -4,10 +4,27 @@ import math
 
 import numpy as np
 
+from pneumaquad.analysis.metrics import step_metrics as analysis_step_metrics
+
 Recording = dict[str, np.ndarray]
 
 #: Speed below which the piston counts as at rest [m/s].
 REST_SPEED = 2e-4
+
+#: The names of :func:`general_metrics`, :func:`step_metrics` and :func:`tracking_metrics`
+#: (a step that never moves gives only the first two step names).
+GENERAL_METRICS = (
+    "simulated time [s]", "final position [m]", "min position [m]", "max position [m]",
+    "max cap pressure [Pa]", "max rod pressure [Pa]", "final cap pressure [Pa]",
+    "final rod pressure [Pa]", "air consumed [kg]", "air consumed [NL]",
+    "final supply pressure [Pa]", "fraction of time at rest",
+)
+STEP_METRICS = (
+    "position at step [m]", "motion onset delay [s]", "stiction peak force [N]",
+    "stiction peak time [s]", "time moving [s]", "rise time 10-90 % [s]",
+    "settling time [s]",
+)
+TRACKING_METRICS = ("rmse [m]", "rmse [% stroke]", "max abs error [m]", "lag [s]")
 
 
 def tracking_metrics(recording: Recording, stroke: float) -> dict[str, float]:
@@ -65,7 +82,12 @@ def step_metrics(recording: Recording, step_time: float) -> dict[str, float]:
     figures["stiction peak time [s]"] = float(times[start + int(np.argmax(segment))])
     moving = np.abs(recording["velocity [m/s]"][onset:]) > REST_SPEED
     figures["time moving [s]"] = float(np.count_nonzero(moving) * (times[1] - times[0]))
+    response = analysis_step_metrics(times[start:], position[start:], step_time=step_time,
+                                     unit="m")
+    figures["rise time 10-90 % [s]"] = response["rise time [s]"]
+    figures["settling time [s]"] = response["settling time [s]"]
     return figures
+
 
 
 def general_metrics(recording: Recording) -> dict[str, float]:
