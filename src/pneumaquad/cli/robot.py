@@ -103,6 +103,20 @@ def _simulation(clock: StageClock, params: str, overrides: list[str] | None,
         return RobotSimulation(robot, supply=supply)
 
 
+#: Where a supply too low to stand or walk can be changed.
+SUPPLY_HINT = "--set actuators.supply_pressure / thorax.mass"
+
+
+def _refuse_short_supply(check, simulation, standing_angles, walking: bool) -> None:
+    """``check`` (:func:`pneumaquad.locomotion.capacity.check_supply`) as a usage error."""
+    from pneumaquad.locomotion.capacity import InsufficientSupplyError
+
+    try:
+        check(simulation, standing_angles, walking=walking)
+    except InsufficientSupplyError as error:
+        raise typer.BadParameter(str(error), param_hint=SUPPLY_HINT) from None
+
+
 def _progress(update: Callable[[int, int], None]) -> Callable[[float, float], None]:
     """A run's progress in simulated seconds for the progress bar (in milliseconds)."""
     return lambda done, total: update(int(done * 1000), int(total * 1000))
@@ -201,6 +215,28 @@ def _report_figures(simulation, run, description: str, joints: list[str] | None)
         if joint in leg_joints:
             console.print(f"  {joint} angle rmse [deg]: {error:.3g}", markup=False,
                           highlight=False)
+    _print_checks(summary)
+
+
+def _print_checks(summary: dict[str, Any]) -> None:
+    """The verdicts of the run's stance checks (:class:`pneumaquad.robot.stance_check.
+    StanceCheck`) and where the run stopped because of one."""
+    for phase, verdict in summary.get("checks", {}).items():
+        if "verified" not in verdict:
+            continue
+        word = "verified" if verdict["verified"] else "[bold red]not verified[/bold red]"
+        console.print(
+            f"stance {'after the hold' if phase == 'stance check' else 'before ' + phase}: "
+            f"{word}: thorax {verdict['thorax height [m]']:.3f} m "
+            f"(target {verdict['target thorax height [m]']:.3f} m), largest joint error "
+            f"{verdict['largest joint error [deg]']:.1f}° "
+            f"({verdict['joint with the largest error']}), roll "
+            f"{verdict['thorax roll [deg]']:+.1f}°, pitch {verdict['thorax pitch [deg]']:+.1f}°",
+            highlight=False)
+    stopped = summary.get("stopped before")
+    if stopped is not None:
+        console.print(f"[yellow]stopped before {stopped['phase']}: {stopped['reason']}"
+                      "[/yellow]", highlight=False)
 
 
 def _check_environment(environment: str) -> None:
@@ -336,6 +372,9 @@ def robot_stand(
         str, typer.Option(help="quadruped, or testbed (front legs, rear on wheels).")
     ] = "quadruped",
     supply: Annotated[str | None, typer.Option(help="Override supply: ideal or tank.")] = None,
+    rise: Annotated[str, typer.Option(
+        help="Stand up with all legs together, a pair at a time (pairs), or auto: pairs "
+             "where the supply is short of what rising together needs.")] = "auto",
     seed: SeedOption = 0,
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
@@ -345,10 +384,16 @@ def robot_stand(
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
     profile: ProfileOption = False,
 ) -> None:
-    """The quadruped stands up from lying on the ground, holds, follows body commands."""
-    from pneumaquad.robot.scenarios import stand_up_phases
+    """The quadruped stands up from lying on the ground, holds, follows body commands; the
+    stance after the hold is checked (height, joint errors, attitude) and reported."""
+    from pneumaquad.locomotion.capacity import check_supply, rise_in_pairs
+    from pneumaquad.robot.scenarios import STANDING_ANGLES, stand_up_phases
 
     clock = command_clock()
+
+    if rise not in ("auto", "together", "pairs"):
+        raise typer.BadParameter(f"{rise!r}: expected auto, together or pairs",
+                                 param_hint="--rise")
 
     if supply not in (None, "ideal", "tank"):
         raise typer.BadParameter(f"{supply!r}: expected ideal or tank", param_hint="--supply")
@@ -359,7 +404,11 @@ def robot_stand(
     with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
         simulation = _simulation(clock, params, overrides, configuration, environment, seed,
                                  supply)
-        phases = stand_up_phases(simulation, hold=hold, posture=posture)
+        if configuration == "quadruped":
+            _refuse_short_supply(check_supply, simulation, STANDING_ANGLES, walking=False)
+        staged = rise == "pairs" or (rise == "auto" and configuration == "quadruped"
+                                     and rise_in_pairs(simulation, STANDING_ANGLES))
+        phases = stand_up_phases(simulation, hold=hold, posture=posture, staged=staged)
         _run(simulation, phases, output, f"{configuration}-stand",
              f"{configuration}: stand up and hold", worker, video, clock, profile)
 
@@ -380,6 +429,7 @@ def robot_walk(
 ) -> None:
     """The quadruped stands up and walks a statically stable crawl (lateral-sequence wave
     gait, duty factor >= 0.75); reports success or failure with the reason."""
+    from pneumaquad.locomotion.capacity import InsufficientSupplyError
     from pneumaquad.locomotion.walk_run import WalkSettingsError, run_walk
 
     clock = command_clock()
@@ -401,6 +451,8 @@ def robot_walk(
         except WalkSettingsError as error:  # out of range, or a gait that cannot be planned
             raise typer.BadParameter(str(error), param_hint=option_names(
                 WALK_SETTINGS, error.fields)) from None
+        except InsufficientSupplyError as error:
+            raise typer.BadParameter(str(error), param_hint=SUPPLY_HINT) from None
         _report(simulation, walk.run, walk.run.summary["description"], worker, video, clock,
                 profile)
     outcome = walk.outcome
@@ -408,6 +460,9 @@ def robot_walk(
         console.print("walking: not judged (the run stopped before the walk began)")
         return
     verdict = "success" if outcome["success"] else "failure"
+    if "distance travelled [m]" not in outcome:  # it did not begin: no verified stance
+        console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])})")
+        return
     console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
                   f"travelled {outcome['distance travelled [m]']:.3f} m of {distance:g} m, "
                   f"air {outcome['air per metre [NL/m]']:.3g} NL/m; negative static margin "
@@ -447,7 +502,8 @@ def robot_export(
 def robot_geometry(
     params: RobotParamsOption = "crr-quadruped", overrides: SetOption = None
 ) -> None:
-    """Print the cylinder linkages (l1, l2, l3, γ0) and the DH table of a leg."""
+    """Print the cylinder linkages (l1, l2, l3, γ0), the DH table of a leg and the least
+    supply pressure at which the robot can stand up, stand and walk (statics)."""
     from pneumaquad.robot.builder import build_robot
     from pneumaquad.robot.kinematics import format_dh_table
     from pneumaquad.robot.legs import leg_dh_table
@@ -467,6 +523,44 @@ def robot_geometry(
             highlight=False,
         )
     console.print(format_dh_table(leg_dh_table(robot, "front_right")), highlight=False)
+    _print_supply_requirements(params, overrides)
+
+
+def _print_supply_requirements(params: str, overrides: list[str] | None) -> None:
+    """The least supply pressure to stand up, stand and walk, from statics."""
+    from pneumaquad.locomotion.capacity import (
+        FOUR_LEGGED_RISE_MARGIN,
+        gauge_text,
+        stall_forces,
+        supply_requirements,
+    )
+    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.robot.scenarios import LYING_ANGLES, STANDING_ANGLES, TUCKED_ANGLES
+    from pneumaquad.robot.simulation import RobotSimulation
+    from pneumaquad.robot.stand_up import stand_up_path
+
+    robot = build_robot(load_robot(params, overrides or []), "quadruped")
+    simulation = RobotSimulation(robot)
+    atmosphere = simulation.atmospheric_pressure()
+    console.print(f"least supply pressure from statics, {robot.model.body_mass.sum():.2f} kg "
+                  f"robot (supply {gauge_text(simulation.supply_pressure(), atmosphere)}):",
+                  highlight=False)
+    for name in JOINT_NAMES:
+        extending, retracting = stall_forces(robot.actuators[name])
+        console.print(f"  {name} cylinder at this supply: {extending:.0f} N extending, "
+                      f"{retracting:.0f} N retracting (Coulomb friction deducted)",
+                      highlight=False)
+    path = stand_up_path(np.linspace(0.0, 1.0, 41), STANDING_ANGLES, LYING_ANGLES,
+                         TUCKED_ANGLES)
+    for requirement in supply_requirements(simulation, STANDING_ANGLES, path):
+        where = ", ".join(f"{math.degrees(a):.0f}°" for a in requirement.angles)
+        console.print(
+            f"  {requirement.situation}: {gauge_text(requirement.pressure, atmosphere)} "
+            f"({requirement.joint} {requirement.force:+.0f} N at alpha, beta, gamma = "
+            f"{where})", highlight=False)
+    console.print(f"  (standing up: all four legs together; below "
+                  f"{FOUR_LEGGED_RISE_MARGIN:g}x that absolute pressure the robot rises a "
+                  "pair of legs at a time, which needs less)", highlight=False)
 
 
 def video_command(

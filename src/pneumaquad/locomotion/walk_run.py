@@ -28,9 +28,16 @@ from pneumaquad.reporting.robot_plots import plot_walking
 from pneumaquad.robot.experiment import Phase, RobotRun, run_phases
 from pneumaquad.robot.simulation import RobotSimulation
 
+from .capacity import check_supply
 from .reach import UnreachablePlanError
 from .walk import WalkPlan
-from .walking import WalkSettings, tip_over_series, walking_outcome, walking_phases
+from .walking import (
+    WalkSettings,
+    leg_posture,
+    tip_over_series,
+    walking_outcome,
+    walking_phases,
+)
 
 __all__ = ["GAIT_FIELDS", "REACH_FIELDS", "WALKING_FIGURE", "WALK_SETTINGS", "JudgedWalk",
            "WalkSettingsError",
@@ -104,8 +111,11 @@ class JudgedWalk:
         The planned references.
     outcome : dict or None
         The judgement (:func:`.walking.walking_outcome` plus the planned smallest static
-        margin and unreachable IK samples); None when the run was interrupted or stopped
-        before the walk began.
+        margin and unreachable IK samples, and under ``"stance"`` the verdict of the
+        stance the walk began from); a failure with the stance's reasons when the stance
+        was not verified and the walk did not begin
+        (:class:`~pneumaquad.robot.stance_check.StanceCheck`); None when the run was
+        interrupted or diverged before the walk began.
     figure : Path or None
         ``walking.png`` of a judged walk.
     """
@@ -200,17 +210,28 @@ def run_walk(
     ------
     WalkSettingsError
         Before anything runs (:func:`plan_walking`).
+    InsufficientSupplyError
+        Before anything runs: the supply is below what statics asks to stand and walk
+        (:func:`.capacity.check_supply`).
     SimulationDivergedError
         After writing the run folder, when the simulation diverged (not judged).
     """
     clock = StageClock() if clock is None else clock
     with clock.stage("walk plan"):
         phases, plan = plan_walking(simulation, settings)
+        check_supply(simulation, leg_posture(plan.references[0]), walking=True)
     robot = simulation.robot
     where = f"{settings.distance:g} m on {robot.environment}"
     folder = create_run_folder(output, f"walk-{robot.environment}")
     run = run_phases(simulation, phases, folder, description or f"quadruped: walk {where}",
                      progress, clock=clock, on_sample=on_sample)
+    stance = run.summary.get("checks", {}).get("walk")
+    stopped = run.summary.get("stopped before")
+    if stopped is not None and stopped["phase"] == "walk":
+        outcome = {"success": False, "reasons": [stopped["reason"]], "stance": stance}
+        RunFolderWriter(folder).update_summary({"walking": outcome})
+        run.summary["walking"] = outcome
+        return JudgedWalk(run, plan, outcome, None)
     if run.interrupted or "walk" not in run.summary["phases"]:
         return JudgedWalk(run, plan, None, None)
     with clock.stage("walk judgement"):
@@ -219,6 +240,7 @@ def run_walk(
         outcome["planned smallest static margin [m]"] = float(plan.margins.min())
         outcome["planned unreachable IK samples [count]"] = int(
             sum(plan.cycle.unreachable_counts.values()))
+        outcome["stance"] = stance
     with clock.stage("plots"):
         figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
                               figure_title or f"walk {where}")

@@ -25,7 +25,9 @@ from pneumaquad.robot.builder import RobotModel
 from pneumaquad.robot.experiment import Phase
 from pneumaquad.robot.scenarios import stand_up_phases
 from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.stance_check import StanceCheck
 
+from .capacity import rise_in_pairs
 from .heading_control import HeadingHold
 from .reach import check_reach, choose_posture
 from .stance_control import StanceController, StanceControlSettings
@@ -90,10 +92,21 @@ def walking_gait(robot: RobotModel, settings: WalkSettings, angles: np.ndarray) 
                       transfer_gap=settings.transfer_gap, start_up=True)
 
 
+def leg_posture(pose: np.ndarray) -> np.ndarray:
+    """The mean (alpha, beta, gamma) [rad] over the legs of a pose (joints,)."""
+    return np.asarray(pose, dtype=float).reshape(-1, 3).mean(axis=0)
+
+
 def walking_phases(
     simulation: RobotSimulation, settings: WalkSettings
 ) -> tuple[list[Phase], WalkPlan]:
     """Stand up into the gait's first pose, walk, stop; returns the phases and the plan.
+
+    The robot stands up a pair of legs at a time where the supply is short of what the
+    four-legged rise needs (:func:`.capacity.rise_in_pairs`). The walk begins only from
+    a verified stance: its phase's gate is a
+    :class:`~pneumaquad.robot.stance_check.StanceCheck` of the first pose (the verdict in
+    the summary's ``"checks"``; a stance out of its limits ends the run before the walk).
 
     The gait is planned about :data:`WALKING_ANGLES`, or about another posture where the
     legs cannot reach that plan (:func:`.reach.choose_posture`, e.g. walking sideways).
@@ -118,8 +131,9 @@ def walking_phases(
     closed = np.ones(robot.joint_count, dtype=bool)
     # Stand up straight into the gait's first pose, the symmetric stance of its start-up
     # (a separate move from a standing pose to the walking pose dragged the feet).
+    staged = rise_in_pairs(simulation, leg_posture(plan.references[0]))
     phases = stand_up_phases(simulation, hold=3.0, posture=False,
-                             standing_angles=plan.references[0])
+                             standing_angles=plan.references[0], check=False, staged=staged)
     walk_start = sum(phase.duration for phase in phases)
     step = simulation.control_step
 
@@ -138,7 +152,8 @@ def walking_phases(
         references = HeadingHold(simulation, references)
     feedback = (settings.stance_control is not None or settings.swing_from_ground
                 or settings.heading_hold)
-    walking = Phase("walk", duration, references, closed, feedback=feedback)
+    walking = Phase("walk", duration, references, closed, feedback=feedback,
+                    gate=StanceCheck(plan.references[0]))
     phases += [
         walking,
         Phase("stop", 1.0, plan.references[-1], closed),

@@ -223,12 +223,31 @@ def _problems(exc: ValidationError, raw: dict[str, Any], root: type[BaseModel]) 
     return problems
 
 
-def _validate(root: type[BaseModel], data: dict[str, Any], raw: dict[str, Any], source: str) -> Any:
-    atmospheric = None
+def _raw_atmosphere(raw: dict[str, Any]) -> float | None:
+    """The absolute ``gas.atmospheric_pressure`` [Pa] of a raw parameter table, if valid."""
     gas = raw.get("gas")
     if isinstance(gas, dict):
         with contextlib.suppress(QuantityError):  # reported by validation itself
-            atmospheric = convert_quantity(gas.get("atmospheric_pressure"), "pressure")
+            return convert_quantity(gas.get("atmospheric_pressure"), "pressure")
+    return None
+
+
+def _mounted_atmosphere(raw: dict[str, Any]) -> float | None:
+    """The atmospheric pressure [Pa] of a robot file's actuator sets (the gamma set's, as
+    the three share one supply): what its gauge pressures refer to."""
+    mounting = raw.get("actuators")
+    if not isinstance(mounting, dict) or not isinstance(mounting.get("gamma"), str):
+        return None
+    try:
+        return _raw_atmosphere(_read(_resolve(mounting["gamma"])))
+    except (OSError, ParameterError, ValueError):
+        return None
+
+
+def _validate(root: type[BaseModel], data: dict[str, Any], raw: dict[str, Any], source: str,
+              atmospheric: float | None = None) -> Any:
+    if atmospheric is None:
+        atmospheric = _raw_atmosphere(raw)
     context = {"from_file": True, "atmospheric_pressure": atmospheric}
     try:
         return root.model_validate(data, context=context)
@@ -379,7 +398,7 @@ def load_robot(
         Listing every problem found.
     """
     raw, source = _load_raw(name_or_path, overrides)
-    return _validate(RobotParameters, raw, raw, source)
+    return _validate(RobotParameters, raw, raw, source, _mounted_atmosphere(raw))
 
 
 def load_parameter_set(

@@ -20,6 +20,7 @@ from .schema import (
     MAX_LENGTH,
     MAX_MASS,
     MAX_TIME_CONSTANT,
+    AbsolutePressure,
     Bounds,
     ControllerParameters,
     ControlStep,
@@ -194,11 +195,23 @@ class LinkageParameters(_Model):
 
 
 class CylinderMounting(_Model):
-    """Which actuator parameter set drives each joint type."""
+    """Which actuator parameter set drives each joint type, and the robot's shared supply.
+
+    ``supply_pressure`` [Pa absolute], when given, is the regulated supply of every
+    cylinder (the robot's one regulator) in place of each actuator file's
+    ``supply.supply_pressure``; e.g. ``--set 'actuators.supply_pressure="45 psig"'``.
+    """
 
     alpha: str
     beta: str
     gamma: str
+    supply_pressure: AbsolutePressure | None = None
+
+    def actuator_overrides(self) -> list[str]:
+        """``--set`` items that load the actuator files with this robot's supply."""
+        if self.supply_pressure is None:
+            return []
+        return [f'supply.supply_pressure="{self.supply_pressure!r} Pa"']
 
 
 class JointControllerParameters(ControllerParameters):

@@ -101,7 +101,7 @@ def _robot_actuators(
     for joint in JOINT_NAMES:
         name = getattr(parameters.actuators, joint)
         try:
-            actuators[joint] = load_actuator(name)
+            actuators[joint] = load_actuator(name, parameters.actuators.actuator_overrides())
         except ParameterError as error:
             notes.append(
                 f"actuator set {name!r} of the {joint} joints could not be loaded "

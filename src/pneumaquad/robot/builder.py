@@ -96,7 +96,8 @@ def robot_joints(parameters: RobotParameters, configuration: str = "quadruped") 
     loaded, linkages as given or designed from the stroke; no MuJoCo model is built."""
     if configuration not in CONFIGURATIONS:
         raise ValueError(f"configuration {configuration!r} should be one of {CONFIGURATIONS}")
-    actuators = {name: load_actuator(getattr(parameters.actuators, name))
+    mounting = parameters.actuators
+    actuators = {name: load_actuator(getattr(mounting, name), mounting.actuator_overrides())
                  for name in JOINT_NAMES}
     legs = LEG_NAMES if configuration != "testbed" else ("front_left", "front_right")
     names = tuple(f"{leg}_{joint}" for leg in legs for joint in JOINT_NAMES)

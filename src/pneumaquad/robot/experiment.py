@@ -61,6 +61,12 @@ class Phase:
         once for the whole phase: a reference function that reads the simulation's
         state (e.g. :class:`.stance_control.StanceController`) closes a loop at the
         recording rate.
+    gate : callable, optional
+        ``gate(simulation) -> (reason or None, details)``, called when the phase is about
+        to begin: the details (a JSON-able dict) go to the summary's ``"checks"`` under
+        the phase's name; a reason (str) ends the run there, before this phase (the
+        summary's ``"stopped before"``: the phase and the reason). E.g. a walk that
+        begins only from a verified stance (:class:`.stance_check.StanceCheck`).
     """
 
     name: str
@@ -69,6 +75,7 @@ class Phase:
     closed_loop: np.ndarray
     open_loop_voltage: np.ndarray | None = None
     feedback: bool = False
+    gate: Callable[[RobotSimulation], tuple[str | None, dict[str, Any]]] | None = None
 
     def modes(self) -> np.ndarray:
         """Per-joint control mode codes of :mod:`pneumaquad.robot.coupling`."""
@@ -161,6 +168,8 @@ def run_phases(
     phase_starts = []
     controlled = np.zeros(count, dtype=bool)
     failure: Exception | None = None
+    stopped_before: dict[str, str] | None = None
+    checks: dict[str, dict[str, Any]] = {}
     stepping = feedback_seconds = reference_seconds = recording_seconds = 0.0
     chunks = 0
     with writer.recorder(columns, background=True) as recorder, \
@@ -180,6 +189,12 @@ def run_phases(
         record(simulation.reference_angles)
         try:
             for phase in phases:
+                reason = None
+                if phase.gate is not None:
+                    reason, checks[phase.name] = phase.gate(simulation)
+                if reason is not None:
+                    stopped_before = {"phase": phase.name, "reason": reason}
+                    break
                 phase_starts.append((phase.name, simulation.time))
                 controlled |= np.asarray(phase.closed_loop, dtype=bool)
                 modes = phase.modes()
@@ -242,6 +257,10 @@ def run_phases(
         )
         if extra_summary:
             summary.update(extra_summary)
+        if checks:
+            summary["checks"] = checks
+        if stopped_before is not None:
+            summary["stopped before"] = stopped_before
         summary["diverged"] = failure is not None
         summary["divergences [count]"] = simulation.divergences
         if failure is not None:

@@ -21,11 +21,15 @@ from .experiment import Phase
 from .frames import euler_zyx_matrix
 from .legs import leg_dh_table, solve_leg, thorax_frame_points
 from .simulation import RobotSimulation
+from .stance_check import StanceCheck
+from .stand_up import STAGED_RISE_TIME, staged_rise_phases, stand_up_path
 
 __all__ = [
+    "DIRECT_RISE_TIME",
     "FOOT_CYCLE_PERIODS",
     "LEG_SIGNALS",
     "LYING_ANGLES",
+    "STANCE_CHECK",
     "STANDING_ANGLES",
     "TUCKED_ANGLES",
     "foot_cycle_phases",
@@ -35,6 +39,10 @@ __all__ = [
     "standing_height",
 ]
 
+#: Duration of the four-legged rise from lying to standing [s].
+DIRECT_RISE_TIME = 3.0
+#: The name of the phase, after a stand-up's hold, whose gate checks the stance.
+STANCE_CHECK = "stance check"
 LEG_SIGNALS = ("steps", "trapezoid", "slow-sine", "fast-sine")
 #: Foot-cycle periods [s] of the slow, medium and fast walking motions (not in thesis).
 FOOT_CYCLE_PERIODS = {"slow": 4.0, "medium": 2.0, "fast": 1.0}
@@ -227,13 +235,25 @@ def standing_height(simulation: RobotSimulation, angles: np.ndarray) -> float:
     return -float(np.mean(depths))
 
 
-def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: float = 3.0,
+def stand_up_phases(simulation: RobotSimulation, rise_time: float | None = None,
+                    hold: float = 3.0,
                     posture: bool = True,
-                    standing_angles: np.ndarray = STANDING_ANGLES) -> list[Phase]:
+                    standing_angles: np.ndarray = STANDING_ANGLES,
+                    check: bool = True, staged: bool = False) -> list[Phase]:
     """The quadruped stands up from lying on the ground, holds, then follows body commands.
 
     ``standing_angles`` [rad] is the pose it stands up into: (alpha, beta, gamma) for every
     leg, or one angle per joint (e.g. the first pose of a walk; no body commands then).
+
+    ``staged``: the legs rise a pair at a time, swung away from the body's middle
+    (:func:`.stand_up.staged_rise_phases`), ``rise_time`` [s] per pair (default 5 s; the
+    four-legged rise's default is 3 s),
+    so that each foot carries less of the weight while the legs are spread; the robot
+    stands up so at a lower supply pressure or with a heavier body.
+
+    With ``check``, the hold ends in a "stance check" (a phase of no duration whose gate
+    is :class:`.stance_check.StanceCheck`): the verdict goes to the summary's
+    ``"checks"``, and a stance that is not verified ends the run there (no body commands).
 
     Body commands (thorax height ±3 cm, roll ±5°, pitch ±5°, 2 s each) keep the feet where
     they stand and move the body: each leg's foot target in the thorax frame comes from
@@ -254,19 +274,21 @@ def stand_up_phases(simulation: RobotSimulation, rise_time: float = 3.0, hold: f
 
     tucked = np.tile(TUCKED_ANGLES, len(legs))
 
-    def rise(times):
-        fraction = np.clip((times - 0.5) / rise_time, 0.0, 1.0)
-        first = np.clip(2.0 * fraction, 0.0, 1.0)
-        second = np.clip(2.0 * fraction - 1.0, 0.0, 1.0)
-        first = (first * first * (3.0 - 2.0 * first))[:, None]
-        second = (second * second * (3.0 - 2.0 * second))[:, None]
-        return lying + first * (tucked - lying) + second * (standing - tucked)
+    rise_time = rise_time or (STAGED_RISE_TIME if staged else DIRECT_RISE_TIME)
 
-    phases = [
-        Phase("rest", 0.5, lying, closed),
-        Phase("stand up", rise_time, rise, closed),
-        Phase("hold", hold, standing, closed),
-    ]
+    def rise(times):
+        return stand_up_path(np.clip((times - 0.5) / rise_time, 0.0, 1.0), standing,
+                             lying, tucked)
+
+    phases = [Phase("rest", 0.5, lying, closed)]
+    if staged:
+        phases += staged_rise_phases(simulation, lying, tucked, standing, 0.5, rise_time)
+    else:
+        phases.append(Phase("stand up", rise_time, rise, closed))
+    phases.append(Phase("hold", hold, standing, closed))
+    if check:
+        phases.append(Phase(STANCE_CHECK, 0.0, standing, closed,
+                            gate=StanceCheck(standing)))
     if not posture:
         return phases
     if per_joint:
