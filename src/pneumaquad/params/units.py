@@ -8,6 +8,7 @@ atmospheric pressure added; every other pressure unit (``psi``, ``psia``, ``bar`
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass
@@ -168,6 +169,10 @@ def convert_quantity(
 ) -> float:
     """Convert a quantity string to an SI float; the error message omits the key.
 
+    A string already converted with the same kind and atmospheric pressure is not parsed
+    again (:data:`CONVERTED_CACHE_SIZE` conversions are remembered): loading many variants
+    of one parameter set parses only the values that differ.
+
     Parameters
     ----------
     value : Any
@@ -196,6 +201,17 @@ def convert_quantity(
         if not math.isfinite(value):
             raise QuantityError(f"is not finite; {expect}")
         raise QuantityError(f"has no unit; {expect}")
+    return _convert_text(value, k, atmospheric_pressure)
+
+
+#: Quantity strings whose conversion :func:`convert_quantity` remembers.
+CONVERTED_CACHE_SIZE = 4096
+
+
+@functools.lru_cache(maxsize=CONVERTED_CACHE_SIZE)
+def _convert_text(value: str, k: Kind, atmospheric_pressure: float | None) -> float:
+    """:func:`convert_quantity` of a string (errors are raised afresh, never remembered)."""
+    expect = f"expected {k.expectation}"
     if _NON_FINITE.search(value):
         raise QuantityError(f"is not finite; {expect}")
     text, gauge = value, False

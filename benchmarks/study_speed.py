@@ -1,0 +1,140 @@
+"""Speed of a rig study: one process against the process pool, and the study's own cost.
+
+The study is studies/thesis-variability-step.toml (the thesis's 10 s step protocol with
+friction drawn from the thesis's spread) cut to ``--cases`` cases, run in fresh folders:
+
+(a) in this process, rigs batched through the vectorised kernel (the study's batch size)
+    and one rig at a time (batch 1): thesis step protocols per minute on one core;
+(b) on the local pool of ``--workers`` processes: cases/s, and the parallel efficiency
+    (pool cases/s) / (workers × one-process cases/s), pool start-up included;
+(c) the same cases run directly (parameters loaded, signal built, rigs simulated in the
+    same batches, metrics computed) without the study: the study's overhead per case
+    (scheduling, writing the Parquet rows, reading back what is done) as a share of a
+    case, and apart from it the one-off cost of drawing the design.
+
+Every path is warmed first (a short study in this process: compiled code, pyarrow and the
+pandas it loads), so one-off process start-up is not counted as overhead per case; the
+pool's start-up (spawning and warming its workers) is part of its wall time.
+
+Each path runs ``--repeats`` times, interleaved; the tables give the fastest (the least
+disturbed by other work on the machine) and the range.
+
+Run: ``.venv/bin/python benchmarks/study_speed.py [--cases 512] [--workers N]
+[--repeats 3] [--json out.json]``. Nothing asserts on wall-clock time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import re
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from _bench import machine_line, table, write_json
+from pneumaquad.params import load_rig
+from pneumaquad.rig import signals
+from pneumaquad.rig.metrics import general_metrics, step_metrics
+from pneumaquad.rig.simulate import simulate_rigs
+from pneumaquad.studies import (
+    default_workers,
+    parse_study,
+    pool_executor,
+    run_study,
+    serial_executor,
+    study_cases,
+)
+from pneumaquad.studies.case_runs import warm_up
+from pneumaquad.studies.run_options import parse_run_options
+
+STUDY = Path(__file__).resolve().parents[1] / "studies" / "thesis-variability-step.toml"
+
+
+def _study(cases: int, batch: int | None = None):
+    text = re.sub(r"(?m)^cases = \d+", f"cases = {cases}", STUDY.read_text(encoding="utf-8"))
+    spec = parse_study(text, str(STUDY))
+    return spec if batch is None else dataclasses.replace(spec, batch=batch)
+
+
+def _timed_study(spec, executor) -> float:
+    with tempfile.TemporaryDirectory() as folder:
+        result = run_study(spec, Path(folder) / "study", executor)
+    assert result.ran == spec.cases and result.failed == 0
+    return result.wall_time
+
+
+def _direct(spec) -> float:
+    """The same cases without the study: load, build, simulate in batches, metrics [s]."""
+    started = time.perf_counter()
+    cases = study_cases(spec)
+    for first in range(0, len(cases), spec.batch):
+        batch = cases[first:first + spec.batch]
+        setups = [load_rig(spec.run.params, [*spec.run.overrides, *c.overrides])
+                  for c in batch]
+        options = parse_run_options(spec.run.kind, spec.run.options)
+        valve = setups[0].actuator.valve
+        command = signals.thesis_step_command(
+            options["voltage"], valve.offset_voltage, valve.min_voltage, valve.max_voltage,
+            setups[0].simulation.control_step, options["step_time"], options["duration"])
+        results = simulate_rigs(setups, np.tile(command, (len(batch), 1)), False)
+        for result in results:
+            general_metrics(result.recording)
+            step_metrics(result.recording, options["step_time"])
+    return time.perf_counter() - started
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", type=int, default=512)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--workers", type=int, default=default_workers())
+    parser.add_argument("--json")
+    arguments = parser.parse_args()
+    cases, workers = arguments.cases, arguments.workers
+    warm_up("rig-step")
+    _timed_study(_study(16), serial_executor)
+    batched, alone_spec = _study(cases), _study(cases, batch=1)
+    drawn = time.perf_counter()
+    study_cases(batched)
+    design = time.perf_counter() - drawn
+    walls: dict[str, list[float]] = {"serial": [], "alone": [], "direct": [], "pool": []}
+    for _ in range(arguments.repeats):
+        walls["serial"].append(_timed_study(batched, serial_executor))
+        walls["alone"].append(_timed_study(alone_spec, serial_executor))
+        walls["direct"].append(_direct(batched))
+        walls["pool"].append(_timed_study(batched, pool_executor(workers)))
+    serial, direct, pooled = (min(walls[k]) for k in ("serial", "direct", "pool"))
+    serial_rate, pool_rate = cases / serial, cases / pooled
+    efficiency = pool_rate / (workers * serial_rate)
+    overhead = (serial - design - direct) / cases
+
+    def row(label: str, key: str) -> list[str]:
+        fastest = min(walls[key])
+        return [label, f"{fastest:.2f} ({fastest:.2f}-{max(walls[key]):.2f})",
+                f"{cases / fastest:.1f}", f"{60 * cases / fastest:.0f}"]
+
+    print(machine_line())
+    print(f"study: {STUDY.name}, {cases} cases of 10 s simulated, batch {batched.batch}, "
+          f"{workers} workers, fastest of {arguments.repeats}")
+    print(table(["run", "wall [s] (range)", "cases/s", "protocols/min"], [
+        row("one process, batched", "serial"),
+        row("one process, one rig at a time", "alone"),
+        row("same cases without the study", "direct"),
+        row(f"pool of {workers} (start-up included)", "pool"),
+    ]))
+    print(f"parallel efficiency of the pool: {100 * efficiency:.0f} %")
+    print(f"study overhead per case: {1e3 * overhead:.2f} ms = "
+          f"{100 * overhead / (direct / cases):.1f} % of a case; drawing the design "
+          f"{design:.2f} s once ({batched.sampling})")
+    write_json(arguments.json, {
+        "cases": cases, "workers": workers, "batch": batched.batch,
+        "walls [s]": walls, "parallel efficiency": efficiency,
+        "overhead per case [s]": overhead, "design [s]": design,
+    })
+
+
+if __name__ == "__main__":
+    main()
