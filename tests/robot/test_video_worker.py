@@ -30,7 +30,9 @@ SMALL = dict(width=64, height=48)
 
 
 def expected_frames(duration: float, fps: float) -> int:
-    return math.floor(duration * fps) + 1
+    """Frames at 0, 1/fps, ... up to ``duration`` [s], a recorded duration (a sum of
+    control steps, e.g. 3.4999999999997 s for 3.5 s) taken to the nearest microsecond."""
+    return math.floor(duration * fps + 1e-6) + 1
 
 
 def finished_video(worker: VideoWorker) -> video_worker.RenderedVideo:
