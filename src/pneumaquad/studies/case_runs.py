@@ -41,8 +41,10 @@ class CaseInterruptedError(RuntimeError):
 
 @dataclass
 class CaseOutcome:
-    """One finished case: ``status`` "ok" or "failed", its error text, its figures and
-    its wall time [s] (a batch's shared simulation time divided among its cases)."""
+    """One finished case: ``status`` "ok" or "failed", its error text, its figures, its
+    wall time [s] (a batch's shared simulation time divided among its cases), where its
+    run folder was kept, and a note on how the run went (a walk's or a stance check's
+    reasons)."""
 
     index: int
     status: str
@@ -50,6 +52,18 @@ class CaseOutcome:
     metrics: dict[str, float] = field(default_factory=dict)
     wall_time: float = math.nan
     run_folder: str = ""
+    note: str = ""
+
+
+def _reasons(summary: Mapping[str, Any], run_kind: str) -> str:
+    """The walk's reasons (success or failure), or the stance check's problems."""
+    if run_kind == "robot-walk":
+        walking = summary.get("walking")
+        if not isinstance(walking, Mapping):
+            return "not judged: the run stopped before the walk began"
+        return "; ".join(str(reason) for reason in walking.get("reasons", []))
+    check = summary.get("checks", {}).get("stance check", {})
+    return "; ".join(str(reason) for reason in check.get("reasons", []))
 
 
 def flat_figures(summary: Mapping[str, Any], prefix: str = "") -> dict[str, float]:
@@ -175,7 +189,7 @@ def _rig_batch(run: RunSpec, metrics: tuple[str, ...], cases: Sequence[Case]
 
 
 def _robot_case(run: RunSpec, metrics: tuple[str, ...], case: Case,
-                folder: Path) -> dict[str, float]:
+                folder: Path) -> tuple[dict[str, float], str]:
     from pneumaquad.robot.builder import build_robot
     from pneumaquad.robot.simulation import RobotSimulation
 
@@ -205,7 +219,7 @@ def _robot_case(run: RunSpec, metrics: tuple[str, ...], case: Case,
         outcome, summary = walk.run, walk.run.summary
     if outcome.interrupted:
         raise CaseInterruptedError(f"case {case.index} was interrupted")
-    return _chosen(flat_figures(summary), metrics)
+    return _chosen(flat_figures(summary), metrics), _reasons(summary, run.kind)
 
 
 def _robot_batch(run: RunSpec, metrics: tuple[str, ...], cases: Sequence[Case],
@@ -216,8 +230,8 @@ def _robot_batch(run: RunSpec, metrics: tuple[str, ...], cases: Sequence[Case],
         kept = runs_folder / f"case-{case.index:06d}" if runs_folder is not None else None
         folder = kept if kept is not None else Path(tempfile.mkdtemp(prefix="pneumaquad-case-"))
         try:
-            figures = _robot_case(run, metrics, case, folder)
-            outcome = CaseOutcome(case.index, "ok", "", figures)
+            figures, note = _robot_case(run, metrics, case, folder)
+            outcome = CaseOutcome(case.index, "ok", "", figures, note=note)
         except CaseInterruptedError:
             raise
         except Exception as error:  # a case's own problem: recorded, the batch goes on

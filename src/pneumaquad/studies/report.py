@@ -3,8 +3,9 @@
 One self-contained page (:class:`pneumaquad.reporting.html.HtmlPage`): the study and its
 varied parameters; per metric its spread (quantiles), its histogram and box plot and its
 scatter against every numeric varied parameter; the cases as parallel coordinates; the
-sensitivity table (:mod:`.sensitivity`) when the design was sampled; and every failed case
-with its error and the one command that repeats it alone.
+sensitivity table (:mod:`.sensitivity`) when the design was sampled; how the runs went (a
+walk's reasons, counted); and every failed case with its error and the one command that
+repeats it alone.
 """
 
 from __future__ import annotations
@@ -104,6 +105,18 @@ def _sensitivity_section(page: HtmlPage, spec: StudySpec, columns: dict[str, np.
                  r.first_order_confidence] for r in rows], digits=3)
 
 
+def _notes_section(page: HtmlPage, notes: np.ndarray, failed: np.ndarray) -> None:
+    """How the recorded runs went (a walk's reasons): each distinct note and its count."""
+    counted: dict[str, int] = {}
+    for note in notes[~failed]:
+        if note:
+            counted[str(note)] = counted.get(str(note), 0) + 1
+    if not counted:
+        return
+    page.heading("How the runs went")
+    page.table(["note", "cases"], sorted(counted.items(), key=lambda item: -item[1]))
+
+
 def _failures_section(page: HtmlPage, spec: StudySpec, cases: list[int],
                       errors: list[str]) -> None:
     page.heading("Failed cases")
@@ -153,6 +166,7 @@ def write_study_report(folder: Path, output: Path | None = None) -> Path:
             page.figure(parallel_png(lines, spec.metrics[0]),
                         "each line a case; every axis scaled to its own range")
     _sensitivity_section(page, spec, columns, numeric)
+    _notes_section(page, columns["note"], failed)
     _failures_section(page, spec, [int(i) for i in columns["case"][failed]],
                       [str(e) for e in columns["error"][failed]])
     return page.write(output if output is not None else folder / REPORT_NAME)

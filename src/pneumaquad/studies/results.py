@@ -12,8 +12,9 @@ Layout (docs/studies.md)::
 
 A table has one row per case: ``case``, ``seed``, one column per varied key (numbers in
 the key's unit, named ``"key [unit]"``; texts for a choice), ``status`` (``"ok"`` or
-``"failed"``), ``error``, ``wall time [s]``, ``run folder``, then one column per metric
-(its summary name, SI units as the summary gives them).
+``"failed"``), ``error``, ``wall time [s]``, ``run folder``, ``note`` (how a robot run
+went: a walk's reasons), then one column per metric (its summary name, SI units as the
+summary gives them).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ RESULTS_NAME = "results.parquet"
 PARTS_FOLDER = "cases"
 RUNS_FOLDER = "runs"
 #: Columns every study table has besides its parameters and metrics.
-FIXED_COLUMNS = ("case", "seed", "status", "error", "wall time [s]", "run folder")
+FIXED_COLUMNS = ("case", "seed", "status", "error", "wall time [s]", "run folder", "note")
 
 
 def results_schema(spec: StudySpec) -> pa.Schema:
@@ -49,7 +50,8 @@ def results_schema(spec: StudySpec) -> pa.Schema:
     fields += [pa.field(p.column, pa.float64() if p.is_number else pa.string())
                for p in spec.varied]
     fields += [pa.field("status", pa.string()), pa.field("error", pa.string()),
-               pa.field("wall time [s]", pa.float64()), pa.field("run folder", pa.string())]
+               pa.field("wall time [s]", pa.float64()), pa.field("run folder", pa.string()),
+               pa.field("note", pa.string())]
     fields += [pa.field(name, pa.float64()) for name in spec.metrics]
     return pa.schema(fields)
 
@@ -67,6 +69,7 @@ def _rows(spec: StudySpec, cases: Sequence[Case], outcomes: Sequence[CaseOutcome
         columns["error"].append(outcome.error)
         columns["wall time [s]"].append(outcome.wall_time)
         columns["run folder"].append(outcome.run_folder)
+        columns["note"].append(outcome.note)
         for name in spec.metrics:
             columns[name].append(outcome.metrics.get(name, float("nan")))
     return pa.table(columns, schema=results_schema(spec))
