@@ -154,3 +154,28 @@ def test_the_command_line_runs_and_reports_a_study(tmp_path: Path) -> None:
     page = (tmp_path / "out" / "report.html").read_text(encoding="utf-8")
     assert "rise time 10-90 % [s]" in page and "data:image/png" in page
     assert load_study(tmp_path / "out" / "study.toml").text == FRICTION_STUDY
+
+
+GRID_STUDY = FRICTION_STUDY.split("[vary.")[0].replace(
+    'sampling = "latin-hypercube"\ncases = 8', 'sampling = "grid"') + """
+[vary."friction.static_force"]
+values = ["3.5 lbf", "5 lbf"]
+
+[vary."supply.supply_pressure"]
+values = ["40 psig", "50.3 psig", "60 psig"]
+"""
+
+
+def test_a_grid_runs_every_combination_and_reports_it_as_a_table(tmp_path: Path) -> None:
+    spec = parse_study(GRID_STUDY)
+    assert spec.cases == 6
+    run_study(spec, tmp_path / "study", serial_executor)
+    table = read_results(tmp_path / "study").to_pydict()
+    assert list(zip(table["friction.static_force [lbf]"], table["supply.supply_pressure [psig]"],
+                    strict=True)) == [(3.5, 40.0), (3.5, 50.3), (3.5, 60.0), (5.0, 40.0),
+                                      (5.0, 50.3), (5.0, 60.0)]
+    peaks = np.array(table["stiction peak force [N]"])
+    assert np.all(peaks[3:] > peaks[:3])  # more static friction, a higher break-away peak
+    page = write_study_report(tmp_path / "study").read_text(encoding="utf-8")
+    assert "Grid: friction.static_force [lbf] down, supply.supply_pressure [psig] across" in page
+    assert "No sensitivity table: a grid design" in page

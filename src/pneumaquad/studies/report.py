@@ -82,6 +82,26 @@ def _metric_sections(page: HtmlPage, spec: StudySpec, columns: dict[str, np.ndar
                         f"{name} against the varied parameters")
 
 
+def _grid_tables(page: HtmlPage, spec: StudySpec, columns: dict[str, np.ndarray]) -> None:
+    """A grid of two keys: each metric as a table, the first key down, the second across
+    (a failed case is a blank cell)."""
+    if spec.sampling != "grid" or len(spec.varied) != 2:
+        return
+    rows_key, columns_key = spec.varied
+    page.heading(f"Grid: {rows_key.column} down, {columns_key.column} across")
+    down, across = columns[rows_key.column], columns[columns_key.column]
+    for name in spec.metrics:
+        page.heading(name, level=3)
+        rows = []
+        for row_value in rows_key.values:
+            cells = []
+            for column_value in columns_key.values:
+                found = (down == row_value) & (across == column_value)
+                cells.append(float(columns[name][found][0]) if found.any() else None)
+            rows.append([row_value, *cells])
+        page.table([rows_key.column, *(str(v) for v in columns_key.values)], rows)
+
+
 def _sensitivity_section(page: HtmlPage, spec: StudySpec, columns: dict[str, np.ndarray],
                          numeric: dict[str, np.ndarray]) -> None:
     page.heading("Sensitivity")
@@ -165,6 +185,7 @@ def write_study_report(folder: Path, output: Path | None = None) -> Path:
         if np.all(np.isfinite(np.column_stack(list(lines.values()))), axis=1).any():
             page.figure(parallel_png(lines, spec.metrics[0]),
                         "each line a case; every axis scaled to its own range")
+    _grid_tables(page, spec, columns)
     _sensitivity_section(page, spec, columns, numeric)
     _notes_section(page, columns["note"], failed)
     _failures_section(page, spec, [int(i) for i in columns["case"][failed]],
