@@ -65,3 +65,12 @@ def test_the_command_line_refuses_a_bad_spec_without_a_traceback(tmp_path: Path)
     assert done.returncode == 2
     assert 'vary."rig.load_mas"' in done.stderr and "Traceback" not in done.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_a_walk_setting_out_of_range_names_the_option() -> None:
+    walk = Path(__file__).resolve().parents[2] / "studies" / "walking-robustness.toml"
+    text = walk.read_text(encoding="utf-8")
+    assert 'distance = "0.3 m"' in text
+    parse_study(text)
+    message = _refused(text.replace('distance = "0.3 m"', 'distance = "300 m"'))
+    assert "run.distance" in message and "at most 100 m" in message

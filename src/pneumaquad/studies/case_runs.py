@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from pneumaquad.params.errors import ParameterError, Problem
 from pneumaquad.params.loader import load_rig, load_robot
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.rig import signals
@@ -32,7 +33,8 @@ from pneumaquad.rig.simulate import RigDivergedError, RigResult, simulate_rig, s
 from .run_options import RunSpec, parse_run_options
 from .sampling import Case
 
-__all__ = ["CaseInterruptedError", "CaseOutcome", "flat_figures", "run_batch", "warm_up"]
+__all__ = ["CaseInterruptedError", "CaseOutcome", "flat_figures", "run_batch", "walk_settings",
+           "warm_up"]
 
 
 class CaseInterruptedError(RuntimeError):
@@ -206,20 +208,42 @@ def _robot_case(run: RunSpec, metrics: tuple[str, ...], case: Case,
         outcome = run_phases(simulation, phases, folder, f"study case {case.index}: stand")
         summary = outcome.summary
     else:
-        import dataclasses
-
         from pneumaquad.locomotion.walk_run import run_walk
-        from pneumaquad.locomotion.walking import WalkSettings
 
-        changes = {name: options[name] for name in
-                   ("distance", "speed", "heading", "period", "duty_factor")
-                   if options[name] is not None}
-        settings = dataclasses.replace(WalkSettings(), **changes)
-        walk = run_walk(simulation, settings, folder, f"study case {case.index}: walk")
+        walk = run_walk(simulation, walk_settings(options), folder,
+                        f"study case {case.index}: walk")
         outcome, summary = walk.run, walk.run.summary
     if outcome.interrupted:
         raise CaseInterruptedError(f"case {case.index} was interrupted")
     return _chosen(flat_figures(summary), metrics), _reasons(summary, run.kind)
+
+
+#: The run options of a walk that are fields of its settings.
+WALK_FIELDS = ("distance", "speed", "heading", "period", "duty_factor")
+
+
+def walk_settings(options: Mapping[str, Any]) -> Any:
+    """The :class:`pneumaquad.locomotion.walking.WalkSettings` of a walk's run options
+    (SI; an option left out keeps the library's default).
+
+    Raises
+    ------
+    ParameterError
+        Naming ``run.<option>`` when a setting is out of its range.
+    """
+    import dataclasses
+
+    from pneumaquad.locomotion.walk_run import WalkSettingsError, check_walk_settings
+    from pneumaquad.locomotion.walking import WalkSettings
+
+    changes = {name: options[name] for name in WALK_FIELDS if options.get(name) is not None}
+    settings = dataclasses.replace(WalkSettings(), **changes)
+    try:
+        check_walk_settings(settings)
+    except WalkSettingsError as error:
+        raise ParameterError([Problem(f"run.{field}", getattr(settings, field), str(error))
+                              for field in error.fields]) from None
+    return settings
 
 
 def _robot_batch(run: RunSpec, metrics: tuple[str, ...], cases: Sequence[Case],

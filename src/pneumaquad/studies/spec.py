@@ -280,7 +280,11 @@ def _check_against_parameters(run: RunSpec, varied: tuple[VariedParameter, ...])
             problems = [Problem(f'vary."{parameter.key}"', p.value, p.expected)
                         if p.key == parameter.key else p for p in error.problems]
             raise ParameterError(problems, error.source) from None
-    parse_run_options(run.kind, options)
+    parsed = parse_run_options(run.kind, options)
+    if run.kind == "robot-walk":
+        from .case_runs import walk_settings
+
+        walk_settings(parsed)
 
 
 def parse_study(text: str, source: str = "study") -> StudySpec:
