@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import re
 import tempfile
 import time
@@ -94,19 +95,22 @@ def main() -> None:
     parser.add_argument("--json")
     arguments = parser.parse_args()
     cases, workers = arguments.cases, arguments.workers
+    load_before = " ".join(f"{value:.2f}" for value in os.getloadavg())
     warm_up("rig-step")
     _timed_study(_study(16), serial_executor)
     batched, alone_spec = _study(cases), _study(cases, batch=1)
-    drawn = time.perf_counter()
-    study_cases(batched)
-    design = time.perf_counter() - drawn
-    walls: dict[str, list[float]] = {"serial": [], "alone": [], "direct": [], "pool": []}
+    walls: dict[str, list[float]] = {"design": [], "serial": [], "alone": [], "direct": [],
+                                     "pool": []}
     for _ in range(arguments.repeats):
+        drawn = time.perf_counter()
+        study_cases(batched)
+        walls["design"].append(time.perf_counter() - drawn)
         walls["serial"].append(_timed_study(batched, serial_executor))
         walls["alone"].append(_timed_study(alone_spec, serial_executor))
         walls["direct"].append(_direct(batched))
         walls["pool"].append(_timed_study(batched, pool_executor(workers)))
-    serial, direct, pooled = (min(walls[k]) for k in ("serial", "direct", "pool"))
+    design, serial, direct, pooled = (min(walls[k]) for k in ("design", "serial", "direct",
+                                                              "pool"))
     serial_rate, pool_rate = cases / serial, cases / pooled
     efficiency = pool_rate / (workers * serial_rate)
     overhead = (serial - design - direct) / cases
@@ -117,6 +121,7 @@ def main() -> None:
                 f"{cases / fastest:.1f}", f"{60 * cases / fastest:.0f}"]
 
     print(machine_line())
+    print(f"load average before the run: {load_before}")
     print(f"study: {STUDY.name}, {cases} cases of 10 s simulated, batch {batched.batch}, "
           f"{workers} workers, fastest of {arguments.repeats}")
     print(table(["run", "wall [s] (range)", "cases/s", "protocols/min"], [
@@ -132,7 +137,7 @@ def main() -> None:
     write_json(arguments.json, {
         "cases": cases, "workers": workers, "batch": batched.batch,
         "walls [s]": walls, "parallel efficiency": efficiency,
-        "overhead per case [s]": overhead, "design [s]": design,
+        "overhead per case [s]": overhead,
     })
 
 
