@@ -19,8 +19,11 @@ pool's start-up (spawning and warming its workers) is part of its wall time.
 Each path runs ``--repeats`` times, interleaved; the tables give the fastest (the least
 disturbed by other work on the machine) and the range.
 
+``--robot`` measures (b) on a robot study instead (the quadruped standing up, one case per
+supply pressure), e.g. ``--robot --cases 16``.
+
 Run: ``.venv/bin/python benchmarks/study_speed.py [--cases 512] [--workers N]
-[--repeats 3] [--json out.json]``. Nothing asserts on wall-clock time.
+[--repeats 3] [--robot] [--json out.json]``. Nothing asserts on wall-clock time.
 """
 
 from __future__ import annotations
@@ -67,6 +70,44 @@ def _timed_study(spec, executor) -> float:
     return result.wall_time
 
 
+#: A robot study for ``--robot``: the quadruped stands up (1 s hold, no body commands) at
+#: supply pressures spread over 45-60 psig, one case each.
+ROBOT_STUDY = """
+[study]
+name = "stand-speed"
+sampling = "latin-hypercube"
+cases = {cases}
+seed = 1
+metrics = ["checks.stance check.verified", "phases.stand up.air consumed [NL]"]
+
+[run]
+kind = "robot-stand"
+hold = "1 s"
+posture = false
+
+[vary."actuators.supply_pressure"]
+distribution = "uniform"
+low = "45 psig"
+high = "60 psig"
+"""
+
+
+def robot_efficiency(cases: int, workers: int, repeats: int) -> None:
+    """Parallel efficiency of the pool on a robot study (``--robot``)."""
+    spec = parse_study(ROBOT_STUDY.format(cases=cases))
+    warm_up("robot-stand")
+    walls: dict[str, list[float]] = {"serial": [], "pool": []}
+    for _ in range(repeats):
+        walls["serial"].append(_timed_study(spec, serial_executor))
+        walls["pool"].append(_timed_study(spec, pool_executor(workers)))
+    serial, pooled = min(walls["serial"]), min(walls["pool"])
+    print(machine_line())
+    print(f"robot stand study, {cases} cases, {workers} workers, fastest of {repeats}: "
+          f"one process {serial:.2f} s ({cases / serial:.2f} cases/s), pool {pooled:.2f} s "
+          f"({cases / pooled:.2f} cases/s, start-up included)")
+    print(f"parallel efficiency of the pool: {100 * serial / (workers * pooled):.0f} %")
+
+
 def _direct(spec) -> float:
     """The same cases without the study: load, build, simulate in batches, metrics [s]."""
     started = time.perf_counter()
@@ -92,9 +133,14 @@ def main() -> None:
     parser.add_argument("--cases", type=int, default=512)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--workers", type=int, default=default_workers())
+    parser.add_argument("--robot", action="store_true",
+                        help="measure the pool on a robot stand-up study instead")
     parser.add_argument("--json")
     arguments = parser.parse_args()
     cases, workers = arguments.cases, arguments.workers
+    if arguments.robot:
+        robot_efficiency(cases, workers, arguments.repeats)
+        return
     load_before = " ".join(f"{value:.2f}" for value in os.getloadavg())
     warm_up("rig-step")
     _timed_study(_study(16), serial_executor)
