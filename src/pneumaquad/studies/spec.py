@@ -279,7 +279,7 @@ def _check_against_parameters(run: RunSpec, varied: tuple[VariedParameter, ...])
         except ParameterError as error:
             problems = [Problem(f'vary."{parameter.key}"', p.value, p.expected)
                         if p.key == parameter.key else p for p in error.problems]
-            raise ParameterError(problems, error.source) from None
+            raise ParameterError(problems) from None  # named after the study file
     parsed = parse_run_options(run.kind, options)
     if run.kind == "robot-walk":
         from .case_runs import walk_settings
