@@ -53,3 +53,23 @@ def test_cases_and_seeds_follow_from_the_study_seed() -> None:
     assert static.min() >= 3.5 and static.max() <= 5.0
     assert cases[0].overrides[0].startswith('friction.static_force="')
     assert cases[0].overrides[0].endswith(' lbf"')
+
+
+def test_integers_and_choices_of_a_list_keep_their_kind() -> None:
+    text = FRICTION_STUDY.split("[vary.")[0].replace(
+        'sampling = "latin-hypercube"\ncases = 8', 'sampling = "list"') + """
+[vary."simulation.substeps"]
+values = [4, 5]
+
+[vary."friction.model"]
+values = ["stribeck_tanh", "lugre"]
+
+[vary."run.voltage"]
+values = ["6 V", "6.5 V"]
+"""
+    spec = parse_study(text)
+    cases = study_cases(spec)
+    assert cases[1].overrides == ("simulation.substeps=5", 'friction.model="lugre"')
+    assert cases[1].run_options["voltage"] == "6.5 V"
+    assert [p.column for p in spec.varied] == ["simulation.substeps", "friction.model",
+                                               "run.voltage [V]"]

@@ -90,13 +90,18 @@ def _grid_tables(page: HtmlPage, spec: StudySpec, columns: dict[str, np.ndarray]
     rows_key, columns_key = spec.varied
     page.heading(f"Grid: {rows_key.column} down, {columns_key.column} across")
     down, across = columns[rows_key.column], columns[columns_key.column]
+
+    def stored(parameter: VariedParameter, value: object) -> object:
+        return value if parameter.is_number else str(value)  # a choice is stored as text
+
     for name in spec.metrics:
         page.heading(name, level=3)
         rows = []
         for row_value in rows_key.values:
             cells = []
             for column_value in columns_key.values:
-                found = (down == row_value) & (across == column_value)
+                found = ((down == stored(rows_key, row_value))
+                         & (across == stored(columns_key, column_value)))
                 cells.append(float(columns[name][found][0]) if found.any() else None)
             rows.append([row_value, *cells])
         page.table([rows_key.column, *(str(v) for v in columns_key.values)], rows)

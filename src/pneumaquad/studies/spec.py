@@ -73,12 +73,16 @@ class VariedParameter:
         For Latin hypercube and Sobol sampling.
     values : tuple or None
         For a grid or a list: numbers [unit], or texts/booleans for a choice.
+    integer : bool
+        Whether the values were written as plain integers (``substeps``, ``run.seed``):
+        their overrides and run options stay integers.
     """
 
     key: str
     unit: str
     distribution: Distribution | None = None
     values: tuple[Any, ...] | None = None
+    integer: bool = False
 
     @property
     def column(self) -> str:
@@ -91,13 +95,17 @@ class VariedParameter:
         return self.values is None or all(isinstance(v, float) for v in self.values)
 
     def spec_value(self, value: Any) -> Any:
-        """A case's value as a spec would write it: ``"4.2 lbf"``, 0.75, ``"lugre"``."""
+        """A case's value as a spec would write it: ``"4.2 lbf"``, 0.75, 3, ``"lugre"``."""
         if isinstance(value, float):
+            if self.integer:
+                return int(value)
             return f"{value!r} {self.unit}" if self.unit else value
         return value
 
     def override(self, value: Any) -> str:
         """The case's ``--set`` item: ``friction.static_force="4.2 lbf"``."""
+        if isinstance(value, float) and self.integer:
+            return f"{self.key}={int(value)}"
         if isinstance(value, float):
             return f"{self.key}={Quantity(value, self.unit).override_text()}"
         if isinstance(value, bool):
@@ -198,8 +206,9 @@ def _varied(key: str, table: Any, sampling: str) -> VariedParameter:
             if len(units) > 1:
                 raise ParameterError([Problem(f"{where}.values", texts, "should write every "
                                               f"value in one unit (found {sorted(units)})")])
+            integer = all(isinstance(t, int) and not isinstance(t, bool) for t in texts)
             return VariedParameter(key, units.pop(), None,
-                                   tuple(q.number for q in quantities))
+                                   tuple(q.number for q in quantities), integer)
         if not all(isinstance(t, (str, bool)) for t in texts):
             raise ParameterError([Problem(f"{where}.values", texts, "should be all quantities"
                                           " (numbers with one unit) or all texts/booleans")])
