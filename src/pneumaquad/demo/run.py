@@ -90,10 +90,11 @@ def run_demo(folder: Path, progress: Callable[[int, int], None] | None = None) -
     report = DemoReport(folder)
     from pneumaquad.demo.reports import REPORT_SECTIONS
     from pneumaquad.demo.sections import ROBOT_SECTIONS
+    from pneumaquad.demo.study_section import STUDY_SECTIONS
 
     steps = [
         _open_loop_steps, _spacer, _tracking, _stiction, _reference_solver, _tank,
-        *ROBOT_SECTIONS, *REPORT_SECTIONS,
+        *STUDY_SECTIONS, *ROBOT_SECTIONS, *REPORT_SECTIONS,
     ]
     for index, experiment in enumerate(steps):
         experiment(folder, report)
