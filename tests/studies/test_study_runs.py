@@ -179,3 +179,20 @@ def test_a_grid_runs_every_combination_and_reports_it_as_a_table(tmp_path: Path)
     page = write_study_report(tmp_path / "study").read_text(encoding="utf-8")
     assert "Grid: friction.static_force [lbf] down, supply.supply_pressure [psig] across" in page
     assert "No sensitivity table: a grid design" in page
+
+
+def test_a_batch_that_fails_as_a_whole_is_recorded_and_the_study_goes_on(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from pneumaquad.studies import executors
+
+    def failing_first_batch(run, metrics, cases, runs_folder=None):
+        if cases[0].index == 0:
+            raise MemoryError("out of memory")
+        return case_runs.run_batch(run, metrics, cases, runs_folder)
+
+    monkeypatch.setattr(executors, "run_batch", failing_first_batch)
+    result = run_study(parse_study(FRICTION_STUDY), tmp_path / "study", serial_executor)
+    table = read_results(tmp_path / "study").to_pydict()
+    assert result.ran == 8 and result.failed == 3
+    assert table["status"] == ["failed"] * 3 + ["ok"] * 5
+    assert table["error"][0] == "the batch failed: MemoryError: out of memory"

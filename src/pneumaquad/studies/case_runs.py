@@ -28,7 +28,7 @@ from pneumaquad.params.loader import load_rig, load_robot
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.rig import signals
 from pneumaquad.rig.metrics import general_metrics, step_metrics, tracking_metrics
-from pneumaquad.rig.simulate import RigDivergedError, RigResult, simulate_rig, simulate_rigs
+from pneumaquad.rig.simulate import RigResult, simulate_rig, simulate_rigs
 
 from .run_options import RunSpec, parse_run_options
 from .sampling import Case
@@ -142,29 +142,38 @@ def _run_rigs_together(run: RunSpec, metrics: tuple[str, ...],
     try:
         results = simulate_rigs([i.setup for i in items], np.array([i.signal for i in items]),
                                 closed_loop)
-    except RigDivergedError:
+    except Exception:  # a rig diverged (or another failed): each alone names its own
         return [_run_rig_alone(run, metrics, item) for item in items]
     share = (time.perf_counter() - started) / len(items)
-    outcomes = []
-    for item, result in zip(items, results, strict=True):
-        begun = time.perf_counter()
+    return [_rig_outcome(run, metrics, item, result, item.prepared_in + share)
+            for item, result in zip(items, results, strict=True)]
+
+
+def _rig_outcome(run: RunSpec, metrics: tuple[str, ...], item: _RigCase, result: RigResult,
+                 spent: float) -> CaseOutcome:
+    """A finished rig's row; figures that cannot be computed make it a failed case."""
+    begun = time.perf_counter()
+    try:
         figures = _rig_figures(run, metrics, item, result)
-        wall = item.prepared_in + share + time.perf_counter() - begun
-        outcomes.append(CaseOutcome(item.case.index, "ok", "", figures, wall))
-    return outcomes
+    except CaseInterruptedError:
+        raise
+    except Exception as error:  # the case's own problem: recorded, the batch goes on
+        return CaseOutcome(item.case.index, "failed", _error_text(error),
+                           _chosen({}, metrics), spent + time.perf_counter() - begun)
+    return CaseOutcome(item.case.index, "ok", "", figures,
+                       spent + time.perf_counter() - begun)
 
 
 def _run_rig_alone(run: RunSpec, metrics: tuple[str, ...], item: _RigCase) -> CaseOutcome:
     started = time.perf_counter()
     try:
         result = simulate_rig(item.setup, item.signal, run.kind == "rig-sine")
-        figures = _rig_figures(run, metrics, item, result)
-    except RigDivergedError as error:
+    except Exception as error:  # diverged, or the reference solver gave up: recorded
         return CaseOutcome(item.case.index, "failed", _error_text(error),
                            _chosen({}, metrics),
                            item.prepared_in + time.perf_counter() - started)
-    return CaseOutcome(item.case.index, "ok", "", figures,
-                       item.prepared_in + time.perf_counter() - started)
+    return _rig_outcome(run, metrics, item, result,
+                        item.prepared_in + time.perf_counter() - started)
 
 
 def _rig_batch(run: RunSpec, metrics: tuple[str, ...], cases: Sequence[Case]

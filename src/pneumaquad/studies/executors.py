@@ -62,9 +62,16 @@ def default_workers() -> int:
 
 
 def serial_executor(tasks: Iterable[Task]) -> Iterator[tuple[Task, list[CaseOutcome]]]:
-    """Run every batch in this process, in order."""
+    """Run every batch in this process, in order (a batch that fails as a whole, outside
+    any case, is recorded as failed cases, as a pool records a batch its worker lost)."""
     for task in tasks:
-        yield task, run_task(task)
+        try:
+            outcomes = run_task(task)
+        except CaseInterruptedError:
+            raise
+        except Exception as error:
+            outcomes = _failed_batch(task, error, "the batch failed")
+        yield task, outcomes
 
 
 def _worker_started() -> None:
@@ -73,10 +80,11 @@ def _worker_started() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _failed_batch(task: Task, error: BaseException) -> list[CaseOutcome]:
-    """A batch whose worker died: each case recorded as failed with the reason."""
+def _failed_batch(task: Task, error: BaseException,
+                  what: str = "worker lost the batch") -> list[CaseOutcome]:
+    """A batch that failed as a whole: each case recorded as failed with the reason."""
     text = f"{type(error).__name__}: {error}"
-    return [CaseOutcome(case.index, "failed", f"worker lost the batch: {text}",
+    return [CaseOutcome(case.index, "failed", f"{what}: {text}",
                         dict.fromkeys(task.metrics, float("nan"))) for case in task.cases]
 
 
