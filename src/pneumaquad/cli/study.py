@@ -26,12 +26,12 @@ def study_run(
         "cases in this process.")] = None,
     ray: Annotated[str | None, typer.Option(
         "--ray", help='Run on Ray: "local" starts a local cluster of --workers CPUs, or the '
-        "address of a running cluster (needs pip install 'pneumaquad[cluster]').")] = None,
+        "address of a running cluster (needs Ray: pip install 'pneumaquad\\[cluster]').")] = None,
     limit: Annotated[int | None, typer.Option(
         help="Run at most this many of the missing cases (try a study).")] = None,
 ) -> None:
     """Run the cases of a study the folder does not hold yet; each case's row is kept as
-    it ends, failures included. A report follows with ``pneumaquad study report``."""
+    it ends, failures included (docs/studies.md). Report: pneumaquad study report DIR."""
     from pneumaquad.studies import (
         StudyProgress,
         default_workers,
