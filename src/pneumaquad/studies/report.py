@@ -21,7 +21,7 @@ from .plots import distribution_png, parallel_png, scatter_png
 from .results import read_results, study_of
 from .run_options import reproduce_command
 from .sampling import study_cases
-from .sensitivity import MIN_CASES, sensitivity_table
+from .sensitivity import MIN_CASES, sensitivity_table, sobol_indices
 from .spec import StudySpec, VariedParameter
 
 __all__ = ["REPORT_NAME", "write_study_report"]
@@ -110,6 +110,9 @@ def _grid_tables(page: HtmlPage, spec: StudySpec, columns: dict[str, np.ndarray]
 def _sensitivity_section(page: HtmlPage, spec: StudySpec, columns: dict[str, np.ndarray],
                          numeric: dict[str, np.ndarray]) -> None:
     page.heading("Sensitivity")
+    if spec.sampling == "saltelli":
+        _sobol_section(page, spec, columns)
+        return
     if spec.sampling not in ("latin-hypercube", "sobol") or not numeric:
         page.paragraph(f"No sensitivity table: a {spec.sampling} design is not a random "
                        "sample of the parameters (sample them by latin-hypercube or sobol).",
@@ -140,6 +143,26 @@ def _notes_section(page: HtmlPage, notes: np.ndarray, failed: np.ndarray) -> Non
         return
     page.heading("How the runs went")
     page.table(["note", "cases"], sorted(counted.items(), key=lambda item: -item[1]))
+
+
+def _sobol_section(page: HtmlPage, spec: StudySpec, columns: dict[str, np.ndarray]) -> None:
+    """Sobol indices of a Saltelli design (every case of it is needed)."""
+    if len(columns["case"]) != spec.cases:
+        page.paragraph(f"No Sobol indices yet: {len(columns['case'])} of the {spec.cases} "
+                       "cases of the Saltelli design are recorded.", note=True)
+        return
+    rows, skipped = sobol_indices([p.column for p in spec.varied],
+                                  {name: columns[name] for name in spec.metrics}, spec.seed)
+    page.paragraph("Sobol indices from the Saltelli design, through SALib: S1 the share "
+                   "of the metric's variance the parameter explains alone, ST with every "
+                   "interaction it takes part in; ± the half-width of the 95 % bootstrap "
+                   "interval.", note=True)
+    page.table(["metric", "parameter", "S1", "± S1", "ST", "± ST"],
+               [[r.metric, r.parameter, r.first_order, r.first_order_confidence, r.total,
+                 r.total_confidence] for r in rows], digits=3)
+    if skipped:
+        page.paragraph("Left out (a failed or non-finite case, or no spread): "
+                       + ", ".join(skipped) + ".", note=True)
 
 
 def _failures_section(page: HtmlPage, spec: StudySpec, cases: list[int],

@@ -68,6 +68,13 @@ def unit_design(sampling: str, cases: int, dimensions: int, seed: int) -> np.nda
         return qmc.LatinHypercube(dimensions, rng=rng).random(cases)
     if sampling == "sobol":
         return qmc.Sobol(dimensions, scramble=True, rng=rng).random(cases)
+    if sampling == "saltelli":
+        from SALib.sample import sobol as saltelli
+
+        problem = {"num_vars": dimensions, "names": [f"x{j}" for j in range(dimensions)],
+                   "bounds": [[0.0, 1.0]] * dimensions}
+        base = cases // (dimensions + 2)
+        return saltelli.sample(problem, base, calc_second_order=False, seed=seed)
     raise ValueError(f"{sampling!r} is not a sampled design")
 
 

@@ -6,8 +6,11 @@ moment-independent method of Borgonovo (SALib ``delta``, its bias-corrected "bal
 estimator): ``delta`` [-] measures how much knowing a parameter shifts the whole
 distribution of the metric, ``S1`` [-] is the
 first-order Sobol index (the share of the metric's variance that parameter explains
-alone), each with the half-width of its 95 % bootstrap confidence interval. A grid or a
-list is not a random sample of the parameters, so it gets no table.
+alone), each with the half-width of its 95 % bootstrap confidence interval. A Saltelli
+design (``sampling = "saltelli"``) is made for Sobol's indices: :func:`sobol_indices`
+gives the first-order index S1 and the total index ST (S1 plus every interaction the
+parameter takes part in) with their intervals, from all its cases. A grid or a list is
+not a random sample of the parameters, so it gets no table.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MIN_CASES", "SensitivityRow", "sensitivity_table"]
+__all__ = ["MIN_CASES", "SensitivityRow", "SobolRow", "sensitivity_table", "sobol_indices"]
 
 #: Fewest finite cases to estimate indices from.
 MIN_CASES = 32
@@ -82,3 +85,58 @@ def sensitivity_table(parameters: dict[str, np.ndarray], metrics: dict[str, np.n
                                        float(found["delta_balanced_conf"][j]),
                                        float(found["S1"][j]), float(found["S1_conf"][j])))
     return rows
+
+
+@dataclass(frozen=True)
+class SobolRow:
+    """First-order and total Sobol indices [-] of one parameter for one metric, with
+    95 % confidence half-widths."""
+
+    metric: str
+    parameter: str
+    first_order: float
+    first_order_confidence: float
+    total: float
+    total_confidence: float
+
+
+def sobol_indices(names: list[str], metrics: dict[str, np.ndarray],
+                  seed: int = 0) -> tuple[list[SobolRow], list[str]]:
+    """Sobol indices of every metric of a complete Saltelli design.
+
+    Parameters
+    ----------
+    names : list of str
+        The varied parameters, in design order.
+    metrics : dict of str to ndarray (N·(D+2),)
+        Each metric over all cases, in case order.
+    seed : int
+        Seed of the bootstrap.
+
+    Returns
+    -------
+    (rows, skipped)
+        Rows metric by metric; the metrics left out because a case is missing or not
+        finite (the estimator needs every case of the design) or they do not vary.
+    """
+    from SALib.analyze import sobol
+
+    problem = {"num_vars": len(names), "names": names, "bounds": [[0.0, 1.0]] * len(names)}
+    rows, skipped = [], []
+    for metric, values in metrics.items():
+        values = np.asarray(values, dtype=float)
+        if (values.size % (len(names) + 2) or not np.all(np.isfinite(values))
+                or np.ptp(values) == 0.0):
+            skipped.append(metric)
+            continue
+        quiet = io.StringIO()
+        with contextlib.redirect_stdout(quiet), contextlib.redirect_stderr(quiet), \
+                warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            found = sobol.analyze(problem, values, calc_second_order=False,
+                                  num_resamples=RESAMPLES, seed=seed % (2**32 - 1) + 1)
+        for j, name in enumerate(names):
+            rows.append(SobolRow(metric, name, float(found["S1"][j]),
+                                 float(found["S1_conf"][j]), float(found["ST"][j]),
+                                 float(found["ST_conf"][j])))
+    return rows, skipped

@@ -4,8 +4,8 @@ Layout::
 
     [study]
     name = "thesis-variability-step"
-    sampling = "latin-hypercube"   # or "sobol", "grid", "list"
-    cases = 256                    # latin-hypercube and sobol (sobol: a power of two)
+    sampling = "latin-hypercube"   # or "sobol", "saltelli", "grid", "list"
+    cases = 256                    # drawn designs (sobol, saltelli: a power of two)
     seed = 2011
     metrics = ["rise time 10-90 % [s]", "motion onset delay [s]"]
 
@@ -46,7 +46,9 @@ __all__ = ["MAX_CASES", "SAMPLINGS", "StudySpec", "VariedParameter", "load_study
            "parse_study"]
 
 #: Sampling designs: how the varied values become cases.
-SAMPLINGS = ("latin-hypercube", "sobol", "grid", "list")
+SAMPLINGS = ("latin-hypercube", "sobol", "saltelli", "grid", "list")
+#: Samplings that draw from distributions (the others list values).
+DRAWN = ("latin-hypercube", "sobol", "saltelli")
 #: Most cases of one study.
 MAX_CASES = 1_000_000
 #: Metrics a rig run's summary gives, by run kind.
@@ -250,12 +252,18 @@ def _metrics(study: Mapping[str, Any], run: RunSpec) -> tuple[str, ...]:
 
 def _case_count(study: Mapping[str, Any], sampling: str,
                 varied: tuple[VariedParameter, ...]) -> int:
-    if sampling in ("latin-hypercube", "sobol"):
+    if sampling in DRAWN:
         cases = _integer(study, "cases", None, 1, MAX_CASES, f"an integer from 1 to {MAX_CASES}")
-        if sampling == "sobol" and cases & (cases - 1):
-            raise ParameterError([Problem("study.cases", cases, "should be a power of two "
-                                          "for Sobol sampling (its balance holds at 2^m "
-                                          "points)")])
+        if sampling != "latin-hypercube" and cases & (cases - 1):
+            raise ParameterError([Problem("study.cases", cases, f"should be a power of two "
+                                          f"for {sampling} sampling (its balance holds at "
+                                          f"2^m points)")])
+        if sampling == "saltelli":  # N base points, each with D + 2 evaluations
+            cases *= len(varied) + 2
+            if cases > MAX_CASES:
+                raise ParameterError([Problem("study.cases", study["cases"], f"makes "
+                                              f"{cases} runs; should make at most "
+                                              f"{MAX_CASES}")])
         return cases
     counts = [len(v.values or ()) for v in varied]
     count = math.prod(counts) if sampling == "grid" else counts[0]
