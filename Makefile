@@ -15,12 +15,13 @@ $(BIN)/pneumaquad: pyproject.toml $(LOCK)
 	$(BIN)/pip install --quiet --constraint $(LOCK) -e '.[dev]'
 	touch $(BIN)/pneumaquad
 
-# Resolve pyproject.toml's ranges afresh in a throw-away venv and pin what was installed.
+# Resolve pyproject.toml's ranges afresh in a throw-away venv and pin what was installed
+# (the optional cluster extra too, so that installing it later gets pinned versions).
 lock:
 	rm -rf .lock-venv
 	$(PYTHON) -m venv .lock-venv
 	.lock-venv/bin/pip install --quiet --upgrade pip
-	.lock-venv/bin/pip install --quiet -e '.[dev]'
+	.lock-venv/bin/pip install --quiet -e '.[dev,cluster]'
 	{ echo "# Exact versions for make setup/test/demo and .ci/run; refresh with make lock."; \
 	  echo "# Resolved with $$(.lock-venv/bin/python -V) on $$(uname -sm)."; \
 	  .lock-venv/bin/pip freeze --exclude-editable; } > $(LOCK)
