@@ -8,12 +8,15 @@ robot by statics, :mod:`pneumaquad.locomotion.capacity`), and the feet, sliding 
 under load, ask for more.
 
 The **staged** rise (:func:`staged_rise_phases`) swings the legs away from the body's
-middle first (front legs forward, rear legs back, :data:`STAGED_ALPHA`), then lifts the
-front of the body with the front pair while the rear still rests on the ground, then
-the rear with the rear pair, and finally swings the legs back under the standing body.
-While one pair lifts, the lever between the resting end and the far-placed feet gives
-each of them less than a quarter of the weight. It stands up at 45 psig, and with a 3 kg
-thorax at 50.3 psig, where the four-legged rise stalls (docs/robot.md).
+middle first (front legs forward, rear legs back, :data:`STAGED_ALPHA`) and lifts the
+front of the body with the front pair while the rear still rests on the ground: with the
+feet far from the resting end, each carries less than a quarter of the weight. The front
+feet then slide back under the body (the rear still resting), the rear pair lifts the rear
+of the body with its feet far back, and each rear leg in turn steps forward to where it
+stands, its foot lifted, while the other three carry the body (the centre of mass stays
+inside their triangle because the other rear foot is still far back). No foot slides
+under the whole body's load. It stands up at 45 psig and with a 3 or 4 kg thorax at 50.3
+psig, where the four-legged rise stalls (docs/robot.md).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ __all__ = [
     "STAGED_ALPHA",
     "STAGED_RISE_TIME",
     "alpha_swing_signs",
+    "smooth_ramp",
     "staged_rise_phases",
     "stand_up_path",
 ]
@@ -40,10 +44,10 @@ STAGED_ALPHA = math.radians(45.0)
 STAGED_RISE_TIME = 5.0
 #: Duration of the alpha swings out and back [s].
 SWING_TIME = 2.0
-#: Standing still after the swing back, before the hold [s]: the feet slid while the legs
-#: swung back, and the last pair's beta joints take about 6 s to work off the error (4.5°
-#: after 6 s, 5.2° after 3 s at 45 psig).
-SETTLE_TIME = 3.0
+#: A rear leg's step from its swung pose to where it stands [s].
+STEP_TIME = 1.5
+#: How far a stepping leg's beta joint rises at mid-step [rad] (lifts the foot about 5 cm).
+STEP_LIFT = math.radians(15.0)
 
 
 def stand_up_path(fractions: np.ndarray, standing: np.ndarray, lying: np.ndarray,
@@ -77,11 +81,41 @@ def alpha_swing_signs(simulation: RobotSimulation, pose: np.ndarray) -> np.ndarr
     return np.where(reach[0] >= reach[1], 1.0, -1.0)[:legs]
 
 
-def _smooth_ramp(start: np.ndarray, end: np.ndarray, begin: float, duration: float):
+def smooth_ramp(start: np.ndarray, end: np.ndarray, begin: float, duration: float):
+    """References from ``start`` to ``end`` (joints,) [rad] as a smooth step of
+    ``duration`` [s] from ``begin`` [s], then held."""
     def references(times: np.ndarray) -> np.ndarray:
         fraction = np.clip((times - begin) / duration, 0.0, 1.0)
         fraction = (fraction * fraction * (3.0 - 2.0 * fraction))[:, None]
         return start + fraction * (end - start)
+
+    return references
+
+
+def _rise(begin: float, duration: float, rising: np.ndarray, before: np.ndarray,
+          lying: np.ndarray, tucked: np.ndarray, standing: np.ndarray):
+    """References of the joints ``rising`` (joints,) bool along :func:`stand_up_path`
+    from ``begin`` [s]; the others hold ``before``."""
+    def references(times: np.ndarray) -> np.ndarray:
+        fraction = np.clip((times - begin) / duration, 0.0, 1.0)
+        return np.where(rising, stand_up_path(fraction, standing, lying, tucked), before)
+
+    return references
+
+
+def _step(begin: float, leg: int, before: np.ndarray, after: np.ndarray):
+    """References that move leg ``leg``'s joints from ``before`` to ``after`` (joints,)
+    [rad] in :data:`STEP_TIME` from ``begin`` [s], its foot lifted on the way (beta
+    raised by up to :data:`STEP_LIFT`); the other legs hold ``before``."""
+    joints = slice(3 * leg, 3 * leg + 3)
+
+    def references(times: np.ndarray) -> np.ndarray:
+        fraction = np.clip((times - begin) / STEP_TIME, 0.0, 1.0)
+        smooth = fraction * fraction * (3.0 - 2.0 * fraction)
+        table = np.tile(before, (times.size, 1))
+        table[:, joints] = before[joints] + smooth[:, None] * (after[joints] - before[joints])
+        table[:, 3 * leg + 1] -= STEP_LIFT * np.sin(np.pi * fraction)
+        return table
 
     return references
 
@@ -93,8 +127,11 @@ def staged_rise_phases(simulation: RobotSimulation, lying: np.ndarray, tucked: n
 
     ``lying``, ``tucked`` and ``standing`` are per joint [rad]; the robot lies at
     ``lying`` when they begin (the simulation's pose is left so). Phases: "swing out"
-    (2 s), "front pair up" and "rear pair up" (``rise_time`` each), "swing back" (2 s),
-    "settle" (3 s).
+    (all legs, :data:`SWING_TIME`), "front pair up" (``rise_time``), "front pair back"
+    (:data:`SWING_TIME`: the front feet slide back while the rear of the body rests on
+    the ground), "rear pair up" (``rise_time``), then "step <leg>" for each rear leg
+    (:data:`STEP_TIME`: lifted, swung back and set down where it stands, the other three
+    feet carrying the body).
     """
     robot = simulation.robot
     count = robot.joint_count
@@ -104,26 +141,32 @@ def staged_rise_phases(simulation: RobotSimulation, lying: np.ndarray, tucked: n
     simulation.restore(saved)
     swing = np.zeros(count)
     swing[0::3] = signs * STAGED_ALPHA
-    front = np.array([leg.startswith("front") for leg in robot.legs])
-    pairs = [("front pair up", front), ("rear pair up", ~front)]
+    front_legs = np.array([leg.startswith("front") for leg in robot.legs])
+    front = np.repeat(front_legs, 3)
+    swung = (lying + swing, tucked + swing, standing + swing)
+    time = start
     pose = lying + swing
-    phases = [Phase("swing out", SWING_TIME, _smooth_ramp(lying, pose, start, SWING_TIME),
+    phases = [Phase("swing out", SWING_TIME, smooth_ramp(lying, pose, time, SWING_TIME),
                     closed)]
-    time = start + SWING_TIME
-    for name, rising in pairs:
-        joints = np.repeat(rising, 3)
-        target = np.where(joints, standing + swing, pose)
-
-        def references(times: np.ndarray, begin: float = time, joints: np.ndarray = joints,
-                       before: np.ndarray = pose) -> np.ndarray:
-            fraction = np.clip((times - begin) / rise_time, 0.0, 1.0)
-            path = stand_up_path(fraction, standing + swing, lying + swing, tucked + swing)
-            return np.where(joints, path, before)
-
-        phases.append(Phase(name, rise_time, references, closed))
-        pose = target
-        time += rise_time
-    phases.append(Phase("swing back", SWING_TIME,
-                        _smooth_ramp(pose, standing, time, SWING_TIME), closed))
-    phases.append(Phase("settle", SETTLE_TIME, standing, closed))
+    time += SWING_TIME
+    phases.append(Phase("front pair up", rise_time, _rise(time, rise_time, front, pose,
+                                                          *swung), closed))
+    time += rise_time
+    pose = np.where(front, standing + swing, pose)
+    back = np.where(front, standing, pose)
+    phases.append(Phase("front pair back", SWING_TIME,
+                        smooth_ramp(pose, back, time, SWING_TIME), closed))
+    time += SWING_TIME
+    pose = back
+    phases.append(Phase("rear pair up", rise_time, _rise(time, rise_time, ~front, pose,
+                                                         *swung), closed))
+    time += rise_time
+    pose = np.where(front, pose, standing + swing)
+    for leg in np.flatnonzero(~front_legs):
+        after = pose.copy()
+        after[3 * leg: 3 * leg + 3] = standing[3 * leg: 3 * leg + 3]
+        phases.append(Phase(f"step {robot.legs[leg]}", STEP_TIME,
+                            _step(time, int(leg), pose, after), closed))
+        time += STEP_TIME
+        pose = after
     return phases
