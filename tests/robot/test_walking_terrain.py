@@ -78,3 +78,36 @@ def test_stands_up_in_pairs_and_walks_where_the_supply_is_short(tmp_path: Path,
     assert run.summary["checks"]["walk"]["verified"], run.summary["checks"]["walk"]
     outcome = walking_outcome(run.recording, run.summary, settings, robot)
     assert outcome["success"], outcome
+
+
+@pytest.mark.slow
+def test_turns_in_place_by_90_degrees_within_5(tmp_path: Path) -> None:
+    """A turn in place (yaw rate 2°/s rounded to whole cycles): the yaw at the end of the
+    run, from the yaw the robot lay in, within 5° of 90°."""
+    import math
+
+    from pneumaquad.locomotion.walk_run import run_walk
+
+    sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    walk = run_walk(sim, WalkSettings(turn=math.radians(90.0)), tmp_path / "turn")
+    outcome = walk.outcome
+    assert outcome is not None and outcome["success"], outcome
+    assert abs(outcome["turn error [deg]"]) <= 5.0
+    assert outcome["distance travelled [m]"] < 0.15  # it turned where it stood
+
+
+@pytest.mark.slow
+def test_walks_an_arc(tmp_path: Path) -> None:
+    """1 m at 1°/s: the body turns by the planned 48° and covers the distance along the
+    arc."""
+    import math
+
+    from pneumaquad.locomotion.walk_run import run_walk
+
+    sim = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    settings = WalkSettings(distance=1.0, yaw_rate=math.radians(1.0))
+    walk = run_walk(sim, settings, tmp_path / "arc")
+    assert walk.outcome is not None and walk.outcome["success"], walk.outcome
+    yaw = walk.run.recording["thorax yaw [rad]"]
+    planned = settings.body_yaw_rate() * settings.duration()
+    assert abs(yaw[-1] - yaw[0] - planned) < math.radians(5.0)

@@ -463,6 +463,14 @@ def robot_walk(
     if "distance travelled [m]" not in outcome:  # it did not begin: no verified stance
         console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])})")
         return
+    if "turned [deg]" in outcome:
+        console.print(f"turning: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
+                      f"turned {outcome['turned [deg]']:.1f}° of "
+                      f"{outcome['turn asked [deg]']:g}° (error "
+                      f"{outcome['turn error [deg]']:+.1f}°), "
+                      f"drifted {outcome['distance travelled [m]']:.3f} m; stance feet slid "
+                      f"{outcome['largest stance-foot slide [m]']:.2f} m")
+        return
     console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
                   f"travelled {outcome['distance travelled [m]']:.3f} m of {distance:g} m, "
                   f"air {outcome['air per metre [NL/m]']:.3g} NL/m; negative static margin "

@@ -57,6 +57,7 @@ __all__ = [
     "plan_margins",
     "refuse_lift",
     "stance_flags",
+    "stance_travel",
     "sway_axis",
     "sway_for_margin",
     "sway_shifts",
@@ -90,7 +91,12 @@ class CrawlGait:
     step_height : float [m]
         Foot lift at mid-swing.
     heading : float [rad]
-        Direction of travel in the body frame (0 forward, π/2 left); the body does not turn.
+        Direction of travel in the body frame (0 forward, π/2 left).
+    turn : float [rad]
+        Rotation of the body about its vertical axis per stance (counter-clockwise
+        positive), the angular counterpart of ``stride``: relative to the body, each
+        stance foot turns by −turn about the body origin (0: the body does not turn; with
+        a stride, the body walks an arc).
     sway : float
         Fraction of the sideways body shift towards the support triangles' incentres
         (0: no sway, 1: the centre of mass over the incentres' mean lateral position).
@@ -113,6 +119,7 @@ class CrawlGait:
     lift_fraction: float = 0.0
     transfer_gap: float = 0.0
     start_up: bool = False
+    turn: float = 0.0
 
     def __post_init__(self) -> None:
         feet = np.array(self.neutral_feet, dtype=float)
@@ -142,6 +149,11 @@ class CrawlGait:
     def speed(self) -> float:
         """Body speed [m/s]: stride / (β T)."""
         return self.stride / (self.duty_factor * self.period)
+
+    @property
+    def yaw_rate(self) -> float:
+        """Body yaw rate [rad/s]: turn / (β T)."""
+        return self.turn / (self.duty_factor * self.period)
 
     @property
     def direction(self) -> Array:
@@ -303,10 +315,29 @@ def body_positions(gait: CrawlGait, times: ArrayLike) -> Array:
     return position
 
 
+def stance_travel(gait: CrawlGait, times: ArrayLike) -> Array:
+    """Each foot's displacement (n, 4) relative to the body, as a fraction of the stride:
+    +½ at touchdown, −½ at lift-off, back from −½ to +½ in the swing (0 before the first
+    lift-off of a start-up; a straight gait's foot is at neutral + fraction·stride along
+    the heading, apart from the sway)."""
+    times = np.asarray(times, dtype=float)
+    span = gait.duty_factor * gait.period  # the stride of a unit speed
+    unit = dataclasses.replace(gait, stride=span, heading=0.0, sway=0.0, turn=0.0)
+    along = foot_positions_ground(unit, times)[..., 0] - times[..., None]
+    return (along - gait.neutral_feet[:, 0]) / span
+
+
 def foot_targets(gait: CrawlGait, times: ArrayLike) -> Array:
-    """Feet (n, 4, 3) [m] in the body frame at ``times`` (n,) [s] (body travel and sway)."""
+    """Feet (n, 4, 3) [m] in the body frame at ``times`` (n,) [s] (body travel, turn and
+    sway)."""
     feet = foot_positions_ground(gait, times)
     feet[..., :2] -= body_positions(gait, times)[..., None, :]
+    if gait.turn != 0.0:  # each foot turned about the body origin by its share of the turn
+        angle = stance_travel(gait, times) * gait.turn
+        x, y = gait.neutral_feet[:, 0], gait.neutral_feet[:, 1]
+        cosine, sine = np.cos(angle), np.sin(angle)
+        feet[..., 0] += cosine * x - sine * y - x
+        feet[..., 1] += sine * x + cosine * y - y
     feet[..., 2] += gait.neutral_feet[:, 2]
     return feet
 

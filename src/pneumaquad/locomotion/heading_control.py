@@ -41,6 +41,9 @@ class HeadingHold:
         Rate at which the yaw error [rad] is integrated into the foot rotation.
     limit : float [rad]
         Largest foot rotation.
+    yaw_rate : float [rad/s]
+        Rate at which the heading to hold turns (a planned turn or arc): the heading is
+        the first call's yaw plus yaw_rate times the time since.
 
     The arithmetic of a call is compiled (:func:`.feedback_kernels.heading_step`) on
     arrays allocated here; :attr:`heading`, :attr:`rotation` and :attr:`last_time` are
@@ -49,8 +52,10 @@ class HeadingHold:
 
     def __init__(self, simulation: RobotSimulation,
                  references: Callable[[np.ndarray], np.ndarray], gain: float = 0.5,
-                 limit: float = math.radians(8.0)) -> None:
+                 limit: float = math.radians(8.0), yaw_rate: float = 0.0) -> None:
         self.simulation = simulation
+        self.yaw_rate = yaw_rate
+        self._start: tuple[float, float] | None = None  # (heading [rad], time [s])
         self.references = references
         self.gain = gain
         self.limit = limit
@@ -99,9 +104,14 @@ class HeadingHold:
     def __call__(self, times: np.ndarray) -> np.ndarray:
         """Joint references (len(times), joints) [rad] for the next chunk."""
         rows = np.array(self.references(times), dtype=float)
+        if self.yaw_rate != 0.0 and self._start is not None:
+            heading, start = self._start
+            self._state[HEADING] = heading + self.yaw_rate * (self.simulation.time - start)
         singular = heading_step(rows, self._thorax_matrix, self._nominal, self.to_body,
                                 self._stacked, self._workspace, self._matrices, self._state,
                                 self.simulation.time, self.gain, self.limit)
         if singular >= 0:
             raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
+        if self._start is None:
+            self._start = (float(self._state[HEADING]), self.last_time)
         return rows

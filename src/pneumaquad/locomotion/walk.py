@@ -80,10 +80,13 @@ def robot_gait(robot: RobotModel, speed: float, heading: float = 0.0,
                duty_factor: float = 0.8, period: float = 4.0, step_height: float = 0.04,
                sway: float = 1.0, angles: Array = STANDING_ANGLES,
                minimum_margin: float | None = None, lift_fraction: float = 0.0,
-               transfer_gap: float = 0.0, start_up: bool = False) -> CrawlGait:
-    """A crawl gait for ``robot`` about its feet at ``angles`` (speed [m/s], heading [rad]).
+               transfer_gap: float = 0.0, start_up: bool = False,
+               yaw_rate: float = 0.0) -> CrawlGait:
+    """A crawl gait for ``robot`` about its feet at ``angles`` (speed [m/s], heading [rad],
+    yaw rate [rad/s]: an arc, or with speed 0 a turn in place).
 
-    The stride is speed·β·T; the centre of mass is the robot's in the pose ``angles``.
+    The stride is speed·β·T, the turn per stance yaw rate·β·T; the centre of mass is the
+    robot's in the pose ``angles``.
     With ``minimum_margin`` [m], the sway is the least giving that planned margin
     (:func:`.crawl.sway_for_margin`) instead of ``sway``.
     """
@@ -92,7 +95,7 @@ def robot_gait(robot: RobotModel, speed: float, heading: float = 0.0,
                      stride=speed * duty_factor * period, step_height=step_height,
                      heading=heading, sway=sway, com_offset=com,
                      lift_fraction=lift_fraction, transfer_gap=transfer_gap,
-                     start_up=start_up)
+                     start_up=start_up, turn=yaw_rate * duty_factor * period)
     return gait if minimum_margin is None else sway_for_margin(gait, minimum_margin)
 
 

@@ -76,6 +76,11 @@ WALK_SETTINGS: dict[str, Setting] = {
                                  "(locomotion.swing_control), or relative to the body as "
                                  "planned", off_option="swing-from-body"),
     "heading_hold": Setting("Hold the initial heading (locomotion.heading_control)"),
+    "turn": Setting("Turn in place by this angle, counter-clockwise (0: walk the distance)",
+                    _closed(-720.0, 720.0, "deg"), scale=math.pi / 180.0),
+    "yaw_rate": Setting("Body yaw rate, counter-clockwise: walking, an arc; turning in "
+                        "place, its rate (0 there: 2 deg/s)",
+                        _closed(-10.0, 10.0, "deg/s"), scale=math.pi / 180.0),
 }
 
 #: The settings the gait's own checks (:class:`pneumaquad.gait.crawl.CrawlGait`,
@@ -221,9 +226,11 @@ def run_walk(
         phases, plan = plan_walking(simulation, settings)
         check_supply(simulation, leg_posture(plan.references[0]), walking=True)
     robot = simulation.robot
-    where = f"{settings.distance:g} m on {robot.environment}"
+    where = (f"{math.degrees(settings.turn):g}° in place on {robot.environment}"
+             if settings.turning_in_place else f"{settings.distance:g} m on {robot.environment}")
     folder = create_run_folder(output, f"walk-{robot.environment}")
-    run = run_phases(simulation, phases, folder, description or f"quadruped: walk {where}",
+    verb = "turn" if settings.turning_in_place else "walk"
+    run = run_phases(simulation, phases, folder, description or f"quadruped: {verb} {where}",
                      progress, clock=clock, on_sample=on_sample)
     stance = run.summary.get("checks", {}).get("walk")
     stopped = run.summary.get("stopped before")
@@ -243,7 +250,7 @@ def run_walk(
         outcome["stance"] = stance
     with clock.stage("plots"):
         figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
-                              figure_title or f"walk {where}")
+                              figure_title or f"{verb} {where}")
     RunFolderWriter(folder).update_summary({"walking": outcome})
     run.summary["walking"] = outcome
     return JudgedWalk(run, plan, outcome, figure)

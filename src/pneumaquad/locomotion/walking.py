@@ -48,6 +48,13 @@ __all__ = [
 #: Alpha, beta, gamma [rad] the gait is planned about: every IK sample stays reachable
 #: (the standing gamma of 90° is too close to its 95° limit to lift and sway).
 WALKING_ANGLES = np.radians([0.0, -20.0, 80.0])
+#: Yaw rate [rad/s] of a turn in place when none is given: 2°/s, a 14° turn of the feet
+#: about the body per stance of the default 8 s cycle (about the default stride's 0.144 m
+#: at the feet's 0.5 m from the body's centre).
+TURN_RATE = math.radians(2.0)
+#: Largest error of a turn in place [rad] (yaw at the end of the run, from the yaw the
+#: robot lay in) that succeeds.
+TURN_TOLERANCE = math.radians(5.0)
 
 
 @dataclass(frozen=True)
@@ -72,25 +79,48 @@ class WalkSettings(CrawlSettings):
         default_factory=StanceControlSettings)
     swing_from_ground: bool = True
     heading_hold: bool = True
+    turn: float = 0.0
+    yaw_rate: float = 0.0
+
+    @property
+    def turning_in_place(self) -> bool:
+        """A turn in place (``turn`` [rad] not 0): no travel, speed and distance unused."""
+        return self.turn != 0.0
 
     def duration(self) -> float:
         """Walking time [s]: the whole number of gait cycles (at least one) whose planned
         body travel is nearest to the distance. A walk ends as it began, on four feet
         with the body swayed to the same side, within half a cycle's travel
-        (speed·T/2, less than a stride) of the distance."""
-        cycles = max(1, round(self.distance / (self.speed * self.period)))
+        (speed·T/2, less than a stride) of the distance. A turn in place: the whole
+        number of cycles at ``|yaw_rate|`` (:data:`TURN_RATE` if 0) nearest to the turn,
+        the rate then adjusted so that they turn exactly by it."""
+        if self.turning_in_place:
+            rate = abs(self.yaw_rate) or TURN_RATE
+            cycles = max(1, round(abs(self.turn) / (rate * self.period)))
+        else:
+            cycles = max(1, round(self.distance / (self.speed * self.period)))
         return cycles * self.period
+
+    def body_yaw_rate(self) -> float:
+        """Planned body yaw rate [rad/s] (counter-clockwise): the turn over the walk's
+        duration when turning in place, else ``yaw_rate`` (an arc; 0 straight)."""
+        return self.turn / self.duration() if self.turning_in_place else self.yaw_rate
+
+    def body_speed(self) -> float:
+        """Planned body speed [m/s]: 0 when turning in place, else ``speed``."""
+        return 0.0 if self.turning_in_place else self.speed
 
 
 def walking_gait(robot: RobotModel, settings: WalkSettings, angles: np.ndarray) -> CrawlGait:
     """The crawl of ``settings`` for ``robot``, planned about the posture ``angles``
     (alpha, beta, gamma) [rad], with its start-up cycle."""
-    return robot_gait(robot, speed=settings.speed, heading=settings.heading,
+    return robot_gait(robot, speed=settings.body_speed(), heading=settings.heading,
                       duty_factor=settings.duty_factor, period=settings.period,
                       step_height=settings.step_height, angles=angles,
                       minimum_margin=settings.minimum_margin,
                       lift_fraction=settings.lift_fraction,
-                      transfer_gap=settings.transfer_gap, start_up=True)
+                      transfer_gap=settings.transfer_gap, start_up=True,
+                      yaw_rate=settings.body_yaw_rate())
 
 
 #: The phase of a staged walk start that moves the legs from their mean pose into the
@@ -141,6 +171,7 @@ def walking_phases(
     first = plan.references[0]
     symmetric = leg_posture(first)
     default_posture = bool(np.allclose(posture, WALKING_ANGLES))
+    staged = not default_posture or rise_in_pairs(simulation, symmetric)
     if not default_posture:
         # A pair at a time into the legs' mean pose, then into the first pose: rising
         # straight into a sideways first pose (swayed along the body) left a rear alpha
@@ -155,7 +186,7 @@ def walking_phases(
         # separate move from a standing pose to the walking pose dragged the feet), a pair
         # of legs at a time where the supply is short.
         phases = stand_up_phases(simulation, hold=3.0, posture=False, standing_angles=first,
-                                 check=False, staged=rise_in_pairs(simulation, symmetric))
+                                 check=False, staged=staged)
     walk_start = sum(phase.duration for phase in phases)
     step = simulation.control_step
 
@@ -171,7 +202,12 @@ def walking_phases(
     if settings.swing_from_ground:
         references = SwingHeightCorrection(simulation, gait, walk_start, references)
     if settings.heading_hold:
-        references = HeadingHold(simulation, references)
+        references = HeadingHold(simulation, references,
+                                 yaw_rate=settings.body_yaw_rate())
+        if staged or settings.turning_in_place:
+            # the heading the robot lay in: a staged rise turns the body by up to 13°,
+            # and a turn is judged from it
+            references.heading = 0.0
     feedback = (settings.stance_control is not None or settings.swing_from_ground
                 or settings.heading_hold)
     walking = Phase("walk", duration, references, closed, feedback=feedback,
@@ -268,6 +304,14 @@ def walking_outcome(
     displacement = np.array([x[last] - x[first], y[last] - y[first]])
     travelled = float(direction @ displacement)
     sideways = float(abs(direction[0] * displacement[1] - direction[1] * displacement[0]))
+    if settings.yaw_rate != 0.0 and not settings.turning_in_place:
+        # an arc: each step's progress along the heading turned with the body
+        yaw = np.unwrap(recording["thorax yaw [rad]"][first:last + 1])
+        course = settings.heading + yaw[1:] - yaw[0]
+        steps = np.column_stack([np.diff(x[first:last + 1]), np.diff(y[first:last + 1])])
+        travelled = float(np.sum(steps[:, 0] * np.cos(course) + steps[:, 1] * np.sin(course)))
+        sideways = float(abs(np.sum(steps[:, 1] * np.cos(course)
+                                    - steps[:, 0] * np.sin(course))))
     fallen = bool(
         np.any(recording["thorax z [m]"][walking] < 0.15)
         or np.any(np.abs(recording["thorax roll [rad]"][walking]) > math.radians(30.0))
@@ -288,7 +332,14 @@ def walking_outcome(
         reasons.append("fall")
     if violated > 0.05:
         reasons.append("margin violation")
-    if slip > 0.1 * max(travelled, 0.1):
+    if settings.turning_in_place:  # the feet's arc about the body's centre
+        radius = float(np.mean([np.hypot(
+            recording[f"{leg} foot x [m]"][first] - x[first],
+            recording[f"{leg} foot y [m]"][first] - y[first]) for leg in robot.legs]))
+        moved = radius * abs(settings.turn)
+    else:
+        moved = travelled
+    if slip > 0.1 * max(moved, 0.1):
         reasons.append("slip")
     at_limit = []
     for name, lower, upper in zip(robot.joint_names, robot.lower_limits(),
@@ -322,6 +373,19 @@ def walking_outcome(
         "joints at a limit": at_limit,
         "air per metre [NL/m]": air / travelled if travelled > 0 else math.nan,
     }
+    if settings.turning_in_place:
+        yaw = np.unwrap(recording["thorax yaw [rad]"])
+        turned = float(yaw[-1] - yaw[0])
+        outcome["turn asked [deg]"] = math.degrees(settings.turn)
+        outcome["turned [deg]"] = math.degrees(turned)
+        outcome["turn error [deg]"] = math.degrees(turned - settings.turn)
+        outcome["air per metre [NL/m]"] = math.nan
+        if abs(turned - settings.turn) > TURN_TOLERANCE:
+            reasons.append("turned short" if abs(turned) < abs(settings.turn)
+                           else "turned too far")
+        outcome["success"] = not reasons
+        outcome["reasons"] = reasons or ["turned as asked"]
+        return outcome
     stride = settings.speed * settings.duty_factor * settings.period
     planned = settings.duration() * settings.speed
     outcome["planned travel [m]"] = planned
