@@ -204,9 +204,7 @@ def walking_phases(
     if settings.heading_hold:
         references = HeadingHold(simulation, references,
                                  yaw_rate=settings.body_yaw_rate())
-        if staged or settings.turning_in_place:
-            # the heading the robot lay in: a staged rise turns the body by up to 13°,
-            # and a turn is judged from it
+        if settings.turning_in_place:  # from the yaw the robot lay in, as it is judged
             references.heading = 0.0
     feedback = (settings.stance_control is not None or settings.swing_from_ground
                 or settings.heading_hold)
