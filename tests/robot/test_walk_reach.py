@@ -89,3 +89,16 @@ def test_the_walk_is_the_whole_number_of_cycles_nearest_to_the_distance(distance
     assert abs(travel - distance) <= max(0.5 * settings.speed * settings.period,
                                          0.16 - distance) + 1e-12
     assert abs(travel - distance) < stride
+
+
+def test_a_heading_out_of_reach_walks_a_shorter_cycle_at_the_same_speed(robot):
+    from pneumaquad.locomotion.walking import reachable_settings
+
+    straight = WalkSettings(distance=0.5)
+    assert reachable_settings(robot, straight) == straight  # reachable as asked
+    asked = WalkSettings(distance=0.5, heading=math.radians(240.0))  # 14 mm out at 8 s
+    walked = reachable_settings(robot, asked)
+    assert walked.period == pytest.approx(0.875 * asked.period)
+    assert walked.speed == asked.speed and walked.heading == asked.heading
+    unreachable = WalkSettings(step_height=0.3)  # no cycle makes a 30 cm lift reachable
+    assert reachable_settings(robot, unreachable) == unreachable

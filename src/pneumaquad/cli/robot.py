@@ -460,6 +460,10 @@ def robot_walk(
         console.print("walking: not judged (the run stopped before the walk began)")
         return
     verdict = "success" if outcome["success"] else "failure"
+    if outcome.get("period [s]", settings.period) != settings.period:
+        console.print(f"the gait cycle was shortened from {settings.period:g} s to "
+                      f"{outcome['period [s]']:g} s (the same speed, a shorter stride): the "
+                      "legs could not reach the plan of the cycle asked", highlight=False)
     if "distance travelled [m]" not in outcome:  # it did not begin: no verified stance
         console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])})")
         return

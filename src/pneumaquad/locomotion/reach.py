@@ -29,7 +29,7 @@ from pneumaquad.robot.legs import leg_dh_table
 from .walk import CycleSolution, cycle_targets, solve_cycle
 
 __all__ = ["POSTURES", "REACH_TOLERANCE", "UnreachablePlanError", "check_reach",
-           "choose_posture", "largest_miss"]
+           "choose_posture", "largest_miss", "plan_miss"]
 
 #: Largest distance [m] between a planned foot and where the clamped IK puts it that a
 #: plan may keep (the swing then lifts the foot up to 1 cm less than the 4 cm planned;
@@ -72,7 +72,9 @@ def largest_miss(cycle: CycleSolution) -> Miss:
     return Miss(float(misses[sample, leg]), int(leg), int(sample))
 
 
-def _cycles_miss(robot: RobotModel, gait: CrawlGait, samples: int) -> float:
+def plan_miss(robot: RobotModel, gait: CrawlGait, samples: int = 40) -> float:
+    """Largest distance [m] by which the clamped IK misses a planned foot of ``gait``'s
+    steady cycle (and first cycle, with a start-up) on a grid of ``samples``."""
     cycles = [solve_cycle(robot, gait, samples)]
     if gait.start_up:
         cycles.append(solve_cycle(robot, gait, samples, first=True))
@@ -97,7 +99,7 @@ def choose_posture(robot: RobotModel, gait_for: Callable[[np.ndarray], CrawlGait
     ``default`` if the legs reach its plan (steady and first cycle) within
     :data:`REACH_TOLERANCE`, else the first of :data:`POSTURES` whose planned feet all
     have an exact IK answer, else the one with the fewest that have none."""
-    if _cycles_miss(robot, gait_for(default), _SEARCH_SAMPLES) <= REACH_TOLERANCE:
+    if plan_miss(robot, gait_for(default), _SEARCH_SAMPLES) <= REACH_TOLERANCE:
         return default
     best, fewest = default, np.inf
     for angles in POSTURES:

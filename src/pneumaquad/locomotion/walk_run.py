@@ -34,6 +34,7 @@ from .walk import WalkPlan
 from .walking import (
     WalkSettings,
     leg_posture,
+    reachable_settings,
     tip_over_series,
     walking_outcome,
     walking_phases,
@@ -152,8 +153,11 @@ def check_walk_settings(settings: WalkSettings) -> None:
 
 
 def plan_walking(simulation: RobotSimulation,
-                 settings: WalkSettings) -> tuple[list[Phase], WalkPlan]:
-    """:func:`.walking.walking_phases` after :func:`check_walk_settings`.
+                 settings: WalkSettings) -> tuple[list[Phase], WalkPlan, WalkSettings]:
+    """:func:`.walking.walking_phases` after :func:`check_walk_settings`, with the cycle
+    shortened where the legs cannot reach the plan of the one asked
+    (:func:`.walking.reachable_settings`); returns the phases, the plan and the settings
+    walked.
 
     Raises
     ------
@@ -164,7 +168,8 @@ def plan_walking(simulation: RobotSimulation,
     """
     check_walk_settings(settings)
     try:
-        return walking_phases(simulation, settings)
+        settings = reachable_settings(simulation.robot, settings)
+        return (*walking_phases(simulation, settings), settings)
     except UnreachablePlanError as error:
         raise WalkSettingsError(
             f"the legs cannot walk heading {math.degrees(settings.heading):g}° at "
@@ -223,7 +228,7 @@ def run_walk(
     """
     clock = StageClock() if clock is None else clock
     with clock.stage("walk plan"):
-        phases, plan = plan_walking(simulation, settings)
+        phases, plan, settings = plan_walking(simulation, settings)
         check_supply(simulation, leg_posture(plan.references[0]), walking=True)
     robot = simulation.robot
     where = (f"{math.degrees(settings.turn):g}° in place on {robot.environment}"
@@ -235,7 +240,8 @@ def run_walk(
     stance = run.summary.get("checks", {}).get("walk")
     stopped = run.summary.get("stopped before")
     if stopped is not None and stopped["phase"] == "walk":
-        outcome = {"success": False, "reasons": [stopped["reason"]], "stance": stance}
+        outcome = {"success": False, "reasons": [stopped["reason"]], "stance": stance,
+                   "period [s]": settings.period}
         RunFolderWriter(folder).update_summary({"walking": outcome})
         run.summary["walking"] = outcome
         return JudgedWalk(run, plan, outcome, None)
@@ -248,6 +254,7 @@ def run_walk(
         outcome["planned unreachable IK samples [count]"] = int(
             sum(plan.cycle.unreachable_counts.values()))
         outcome["stance"] = stance
+        outcome["period [s]"] = settings.period
     with clock.stage("plots"):
         figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
                               figure_title or f"{verb} {where}")

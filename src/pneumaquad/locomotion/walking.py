@@ -12,7 +12,7 @@ limit, or lost static stability.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -30,7 +30,7 @@ from pneumaquad.robot.stand_up import smooth_ramp
 
 from .capacity import rise_in_pairs
 from .heading_control import HeadingHold
-from .reach import check_reach, choose_posture
+from .reach import REACH_TOLERANCE, check_reach, choose_posture, plan_miss
 from .stance_control import StanceController, StanceControlSettings
 from .swing_control import SwingHeightCorrection
 
@@ -39,6 +39,7 @@ __all__ = [
     "WalkSettings",
     "contact_slide",
     "gait_support_margins",
+    "reachable_settings",
     "tip_over_series",
     "walking_gait",
     "walking_outcome",
@@ -123,6 +124,32 @@ def walking_gait(robot: RobotModel, settings: WalkSettings, angles: np.ndarray) 
                       yaw_rate=settings.body_yaw_rate())
 
 
+#: Cycle periods, as fractions of the one asked, that :func:`reachable_settings` tries in
+#: turn: a shorter cycle at the same speed is a shorter stride and swing (headings 60° and
+#: 240° are out of reach by 14 mm with the default 8 s cycle, within reach with 7 s).
+PERIOD_SCALES = (1.0, 0.875, 0.75)
+
+
+def reachable_settings(robot: RobotModel, settings: WalkSettings) -> WalkSettings:
+    """``settings``, or with the first shorter cycle of :data:`PERIOD_SCALES` whose plan
+    the legs reach (within :data:`.reach.REACH_TOLERANCE`, about the posture
+    :func:`.reach.choose_posture` picks), at the same speed; unchanged when none does
+    (the plan is then refused, :func:`.reach.check_reach`)."""
+    for scale in PERIOD_SCALES:
+        candidate = replace(settings, period=settings.period * scale)
+
+        def gait_for(angles: np.ndarray, candidate: WalkSettings = candidate) -> CrawlGait:
+            return walking_gait(robot, candidate, angles)
+
+        try:
+            gait = gait_for(choose_posture(robot, gait_for, WALKING_ANGLES))
+        except ValueError:  # the gait refuses these settings (e.g. its margin)
+            continue
+        if plan_miss(robot, gait) <= REACH_TOLERANCE:
+            return candidate
+    return settings
+
+
 #: The phase of a staged walk start that moves the legs from their mean pose into the
 #: gait's first pose.
 TO_FIRST_POSE = "to the first pose"
@@ -179,8 +206,8 @@ def walking_phases(
         phases = stand_up_phases(simulation, hold=3.0, posture=False,
                                  standing_angles=symmetric, check=False, staged=True)
         begin = sum(phase.duration for phase in phases)
-        phases.append(Phase(TO_FIRST_POSE, 2.0, smooth_ramp(
-            np.tile(symmetric, len(robot.legs)), first, begin, 1.5), closed))
+        phases.append(Phase(TO_FIRST_POSE, 4.0, smooth_ramp(
+            np.tile(symmetric, len(robot.legs)), first, begin, 2.0), closed))
     else:
         # Straight into the gait's first pose, the symmetric stance of its start-up (a
         # separate move from a standing pose to the walking pose dragged the feet), a pair
