@@ -472,7 +472,7 @@ def robot_walk(
                       f"turned {outcome['turned [deg]']:.1f}° of "
                       f"{outcome['turn asked [deg]']:g}° (error "
                       f"{outcome['turn error [deg]']:+.1f}°), "
-                      f"drifted {outcome['distance travelled [m]']:.3f} m; stance feet slid "
+                      f"drifted {outcome['drift [m]']:.3f} m; stance feet slid "
                       f"{outcome['largest stance-foot slide [m]']:.2f} m")
         return
     console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "

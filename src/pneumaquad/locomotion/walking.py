@@ -404,6 +404,7 @@ def walking_outcome(
         outcome["turn asked [deg]"] = math.degrees(settings.turn)
         outcome["turned [deg]"] = math.degrees(turned)
         outcome["turn error [deg]"] = math.degrees(turned - settings.turn)
+        outcome["drift [m]"] = float(np.hypot(*displacement))
         outcome["air per metre [NL/m]"] = math.nan
         if abs(turned - settings.turn) > TURN_TOLERANCE:
             reasons.append("turned short" if abs(turned) < abs(settings.turn)
