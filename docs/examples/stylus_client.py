@@ -2,8 +2,10 @@
 devices (UDP)").
 
 Sends a circular stylus motion for one leg (front_right by default) at 50 Hz with the
-engage button pressed, and prints the force feedback the console sends back. Written from
-the documentation only: standard library and numpy, no pneumaquad import.
+engage button pressed, and prints the force feedback the console sends back; with
+``--place-every`` it also presses the place-foot button now and then (shared-control
+walking: the front foot's next foothold is where the stylus points at the press).
+Written from the documentation only: standard library and numpy, no pneumaquad import.
 
     pneumaquad console --configuration fixed --start --device-port 47100
     python docs/examples/stylus_client.py --port 47100 --duration 10
@@ -23,6 +25,7 @@ MAGIC, VERSION = b"PNQD", 1
 DEVICE_INPUT, DEVICE_FEEDBACK = 16, 17
 INPUT_COUNT, FEEDBACK_COUNT = 5, 6
 ENGAGE = 1  # button bit 0
+PLACE_FOOT = 2  # button bit 1
 LEGS = ("front_left", "front_right", "rear_left", "rear_right")
 
 
@@ -55,6 +58,8 @@ def main() -> None:
     parser.add_argument("--radius", type=float, default=0.03, help="circle radius [m]")
     parser.add_argument("--period", type=float, default=2.0, help="circle period [s]")
     parser.add_argument("--rate", type=float, default=50.0, help="send rate [Hz]")
+    parser.add_argument("--place-every", type=float, default=0.0,
+                        help="press the place-foot button every this many seconds (0: never)")
     arguments = parser.parse_args()
 
     console = (arguments.host, arguments.port)
@@ -62,11 +67,16 @@ def main() -> None:
     sock.setblocking(False)
     sequence, start = 0, time.monotonic()
     next_send = start
+    next_place = start + arguments.place_every
     while (now := time.monotonic()) - start < arguments.duration:
         # circle in the device's up-forward plane (thorax x up, z forward), from the origin
         phase = 2.0 * np.pi * (now - start) / arguments.period
         position = arguments.radius * np.array([np.sin(phase), 0.0, np.cos(phase) - 1.0])
-        sock.sendto(device_input(sequence, arguments.leg, position, ENGAGE), console)
+        buttons = ENGAGE
+        if arguments.place_every > 0.0 and now >= next_place:  # one datagram: a press
+            buttons |= PLACE_FOOT
+            next_place += arguments.place_every
+        sock.sendto(device_input(sequence, arguments.leg, position, buttons), console)
         sequence += 1
         latest = None
         while True:  # drain; keep the newest feedback

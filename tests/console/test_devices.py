@@ -21,6 +21,7 @@ from pneumaquad.cli.console import console_command
 from pneumaquad.console.app import ConsoleApp
 from pneumaquad.console.devices import (
     BUTTON_ENGAGE,
+    BUTTON_PLACE_FOOT,
     DeviceServer,
     decode_device_feedback,
     decode_device_input,
@@ -235,3 +236,40 @@ def test_console_command_has_a_device_port() -> None:
                                           "--configuration", "fixed", "--device-port", "0"])
     assert result.exit_code == 0, result.output
     assert "Input devices: UDP 127.0.0.1:" in result.output
+
+
+def test_place_foot_button_chooses_the_front_foothold_in_shared_walking(
+        app: ConsoleApp, client_socket: socket.socket) -> None:
+    front_left = 0  # leg index
+    address = ("127.0.0.1", app.devices.server.port)
+    app.reset()
+    for _ in range(25):
+        app.advance()
+    app.set_walking("shared")
+    crawl = app.walking.crawl
+    # placed 6 cm forward (thorax z) with the button
+    forward = np.array([0.0, 0.0, 0.06])
+    client_socket.sendto(encode_device_input(30, time.monotonic(), front_left, forward,
+                                             BUTTON_ENGAGE | BUTTON_PLACE_FOOT), address)
+    _wait_for(app.devices.server, front_left, 30)
+    app.advance()
+    placed = crawl.operator_footholds["front_left"].copy()
+    assert "front_left" in app.devices.placed
+    # moved back 4 cm with engage alone: the placed foothold stays
+    client_socket.sendto(encode_device_input(31, time.monotonic(), front_left,
+                                             np.array([0.0, 0.0, -0.04]), BUTTON_ENGAGE),
+                         address)
+    _wait_for(app.devices.server, front_left, 31)
+    leg = list(app.simulation.robot.legs).index("front_left")
+    start = crawl.footholds[leg].copy()
+    for _ in range(250):
+        app.advance()
+        if crawl.footholds[leg][0] > start[0] + 0.01:
+            break
+    np.testing.assert_array_equal(crawl.operator_footholds["front_left"], placed)
+    assert crawl.footholds[leg] == pytest.approx(placed, abs=0.01)  # it stepped there
+    stylus = app.teleop.legs["front_left"]
+    assert stylus.target[2] < stylus.home[2]  # the stylus itself moved back
+    app.set_walking("off")
+    app.reset()
+    assert not app.devices.placed

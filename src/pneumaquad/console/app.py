@@ -195,6 +195,8 @@ class ConsoleApp:
             self._leave_replay()
             self.home_angles = initial_pose(self.simulation)
             self.teleop.reset()
+            if self.devices is not None:
+                self.devices.clear_placements()
             self.walking = ConsoleWalking(self.simulation)
             self.teleop.enabled = True
             self.controls.clear_history()
@@ -207,8 +209,14 @@ class ConsoleApp:
                 self.devices.apply_inputs(self.teleop, self.simulation.robot.legs)
             count = self.chunk_steps if steps is None else steps
             if self.walking.mode == "shared":
-                self.walking.place_front_feet(
-                    {leg: state.target for leg, state in self.teleop.legs.items()})
+                placed = self.devices.placed if self.devices is not None else {}
+                # a foot placed with its device's button stays where it was placed; the
+                # others follow their styluses
+                self.walking.place_front_feet({leg: state.target
+                                               for leg, state in self.teleop.legs.items()
+                                               if leg not in placed})
+                if self.devices is not None:
+                    self.walking.place_front_feet(self.devices.take_placements())
             self.walking.before_chunk(count * self.simulation.control_step)
             self._last_good = self.simulation.snapshot(self._last_good)
             try:

@@ -60,7 +60,8 @@ __all__ = [
 
 #: Button bit 0: while pressed, the device position drives the foot target.
 BUTTON_ENGAGE = 1 << 0
-#: Button bit 1: reserved, "place foot" in shared-control walking (ignored for now).
+#: Button bit 1: "place foot": in shared-control walking, the front foot's next foothold is
+#: where the device points when the button is pressed (and stays there until pressed again).
 BUTTON_PLACE_FOOT = 1 << 1
 #: Largest leg index a device message may carry (four legs).
 MAX_LEG_INDEX = 3
@@ -326,21 +327,53 @@ class DeviceLink:
         self.scale = scale
         self.max_force = max_force
         self.engaged: set[str] = set()
+        #: Front legs whose footholds the place-foot button chooses (thorax-frame target
+        #: [m] of the latest press), for shared-control walking.
+        self.placed: dict[str, np.ndarray] = {}
+        #: Presses not yet handed to the walking (:meth:`take_placements`).
+        self._new_placements: dict[str, np.ndarray] = {}
+        self._pressed: set[str] = set()
 
     def apply_inputs(self, teleop: FootTeleoperation, legs: tuple[str, ...]) -> list[str]:
-        """Move the stylus of every leg with a fresh, engaged input; return those legs."""
+        """Move the stylus of every leg with a fresh, engaged input; return those legs.
+
+        A press of the place-foot button (its rising edge, engaged or not) moves the
+        stylus to the device position and records the foot target as that leg's placed
+        foothold (:attr:`placed`, :meth:`take_placements`).
+        """
         moved = []
         for leg_index, device_input in self.server.take_fresh().items():
             leg = legs[leg_index] if leg_index < len(legs) else None
             if leg not in teleop.legs:
                 continue
-            if device_input.engaged:
-                self.engaged.add(leg)
+            placing = bool(device_input.buttons & BUTTON_PLACE_FOOT)
+            if device_input.engaged or (placing and leg not in self._pressed):
                 teleop.set_stylus(leg, device_input.position)
                 moved.append(leg)
+            if device_input.engaged:
+                self.engaged.add(leg)
             else:
                 self.engaged.discard(leg)
+            if placing and leg not in self._pressed:
+                target = teleop.legs[leg].target.copy()
+                self.placed[leg] = target
+                self._new_placements[leg] = target
+            if placing:
+                self._pressed.add(leg)
+            else:
+                self._pressed.discard(leg)
         return moved
+
+    def take_placements(self) -> dict[str, np.ndarray]:
+        """The place-foot presses since the last call: leg → foot target [m] (thorax
+        frame) at the press."""
+        placements, self._new_placements = self._new_placements, {}
+        return placements
+
+    def clear_placements(self) -> None:
+        """Forget every placed foothold (the styluses choose the footholds again)."""
+        self.placed.clear()
+        self._new_placements.clear()
 
     def device_forces(self, simulation: RobotSimulation,
                       feedback: FootFeedback) -> np.ndarray:
