@@ -46,7 +46,8 @@ from .stance_kernels import (
     stance_workspace,
 )
 
-__all__ = ["FOUR_LEGGED_RISE_MARGIN", "InsufficientSupplyError", "SupplyRequirement",
+__all__ = ["FOUR_LEGGED_RISE_MARGIN", "SITUATIONS", "InsufficientSupplyError",
+           "SupplyRequirement",
            "check_supply", "cylinder_demands", "least_supply_for_force", "rise_in_pairs",
            "rise_requirement", "stall_forces", "supply_requirements"]
 
@@ -130,6 +131,10 @@ def cylinder_demands(simulation: RobotSimulation, angles: Array,
     return forces
 
 
+#: The kinds of pose :func:`supply_requirements` weighs (module docstring).
+SITUATIONS = ("standing up", "standing", "walking")
+
+
 @dataclass(frozen=True)
 class SupplyRequirement:
     """The least supply pressure of one kind of pose (module docstring).
@@ -155,7 +160,8 @@ class SupplyRequirement:
 
 
 def supply_requirements(simulation: RobotSimulation, standing_angles: Array,
-                        path: Array) -> list[SupplyRequirement]:
+                        path: Array, situations: tuple[str, ...] = SITUATIONS
+                        ) -> list[SupplyRequirement]:
     """The least supply pressure for standing up along ``path``, standing, and walking.
 
     Parameters
@@ -167,24 +173,29 @@ def supply_requirements(simulation: RobotSimulation, standing_angles: Array,
     path : (samples, 3) ndarray
         Leg poses [rad] of the stand-up, lying to standing.
 
+    situations : tuple of str
+        Which of :data:`SITUATIONS` to compute.
+
     Returns
     -------
     list of SupplyRequirement
-        One per situation, in the order standing up, standing, walking.
+        One per situation asked, in the order of :data:`SITUATIONS`.
     """
     robot = simulation.robot
     legs = len(robot.legs)
     saved = simulation.snapshot()
     try:
         four = np.ones(legs, dtype=bool)
-        situations = {
+        poses = {
             "standing up": [(pose, four) for pose in np.asarray(path, dtype=float)],
             "standing": [(standing_angles, four)],
             "walking": [(standing_angles, np.arange(legs) != lifted)
                         for lifted in range(legs)],
         }
         requirements = []
-        for situation, cases in situations.items():
+        for situation, cases in poses.items():
+            if situation not in situations:
+                continue
             best = None
             for angles, carried in cases:
                 demands = cylinder_demands(simulation, angles, carried)
@@ -216,12 +227,13 @@ class InsufficientSupplyError(ValueError):
 
 
 def rise_requirement(simulation: RobotSimulation, standing_angles: Array,
-                     samples: int = 41) -> SupplyRequirement:
+                     samples: int = 21) -> SupplyRequirement:
     """:func:`supply_requirements`' "standing up" of the four-legged rise into
-    ``standing_angles`` (3,) [rad] (:func:`pneumaquad.robot.stand_up.stand_up_path`)."""
+    ``standing_angles`` (3,) [rad] (:func:`pneumaquad.robot.stand_up.stand_up_path`,
+    ``samples`` poses; the largest demand is near the lying pose)."""
     path = stand_up_path(np.linspace(0.0, 1.0, samples), standing_angles, LYING_ANGLES,
                          TUCKED_ANGLES)
-    return supply_requirements(simulation, standing_angles, path)[0]
+    return supply_requirements(simulation, standing_angles, path, ("standing up",))[0]
 
 
 def rise_in_pairs(simulation: RobotSimulation, standing_angles: Array) -> bool:
@@ -247,10 +259,9 @@ def check_supply(simulation: RobotSimulation, standing_angles: Array,
     InsufficientSupplyError
         Naming the supply, the least pressure, the cylinder that limits it and the mass.
     """
-    path = np.asarray(standing_angles, dtype=float)[None, :]
-    requirements = supply_requirements(simulation, standing_angles, path)[1:]
-    if not walking:
-        requirements = requirements[:1]
+    situations = ("standing", "walking") if walking else ("standing",)
+    requirements = supply_requirements(simulation, standing_angles,
+                                       np.empty((0, 3)), situations)
     limiting = max(requirements, key=lambda requirement: requirement.pressure)
     supply = simulation.supply_pressure()
     if supply >= limiting.pressure:

@@ -142,11 +142,13 @@ def reachable_settings(robot: RobotModel, settings: WalkSettings) -> WalkSetting
             return walking_gait(robot, candidate, angles)
 
         try:
-            gait = gait_for(choose_posture(robot, gait_for, WALKING_ANGLES))
+            posture = choose_posture(robot, gait_for, WALKING_ANGLES)
+            # the default posture is chosen only when its plan is within reach
+            if (np.array_equal(posture, WALKING_ANGLES)
+                    or plan_miss(robot, gait_for(posture)) <= REACH_TOLERANCE):
+                return candidate
         except ValueError:  # the gait refuses these settings (e.g. its margin)
             continue
-        if plan_miss(robot, gait) <= REACH_TOLERANCE:
-            return candidate
     return settings
 
 
