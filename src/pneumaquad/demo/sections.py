@@ -45,16 +45,23 @@ def _stand(folder: Path, report: Report) -> None:
     except RenderingUnavailableError as error:
         video_note = f" (No video: {error})"
     phases = run.summary["phases"]
+    stance = run.summary["checks"]["stance check"]
+    if not stance["verified"]:
+        raise RuntimeError(f"the demo robot did not stand up ({folder / 'robot-stand'}): "
+                           + "; ".join(stance["reasons"]))
     t = recording["time [s]"]
     holding = (t >= phases["hold"]["start [s]"] + 1.0) & (t < phases["height up"]["start [s]"])
     report.add(
         "Quadruped: standing up and holding posture",
         "The robot lies on the ground, tucks its feet in, pushes up on all 12 cylinders, "
         "holds, then follows body height (±3 cm), roll (5°) and pitch (5°) commands with "
-        "its feet in place (IK per leg). Figure: first video frame; body.png has the "
-        "thorax height, attitude, foot forces and air." + video_note,
+        "its feet in place (IK per leg). After the hold its stance is checked against "
+        "stated limits (thorax height ±3 cm of the commanded pose's, every joint within "
+        "5°, roll and pitch within 5°): verified. Figure: first video frame; body.png has "
+        "the thorax height, attitude, foot forces and air." + video_note,
         figure,
         {
+            "largest joint error after the hold [deg]": stance["largest joint error [deg]"],
             "standing thorax height [m]": float(np.mean(recording["thorax z [m]"][holding])),
             "largest roll while holding [deg]": float(
                 np.degrees(np.max(np.abs(recording["thorax roll [rad]"][holding])))),
