@@ -88,3 +88,23 @@ def test_compiled_functions_carry_the_package_cache() -> None:
 
     assert isinstance(_double, numba.core.dispatcher.Dispatcher)
     assert Path(_double._cache.cache_path).is_relative_to(cache_folder())
+
+
+def test_old_cache_folders_are_pruned_to_the_most_recently_used(tmp_path):
+    import os
+
+    from pneumaquad.core.jit import prune_cache_folders
+
+    folders = []
+    for age in range(12):  # numba-0 newest ... numba-11 oldest
+        folder = tmp_path / f"numba-{age}"
+        (folder / "sub").mkdir(parents=True)
+        (folder / "sub" / "f.nbi").write_bytes(b"x")
+        os.utime(folder, (1e9 - age * 100, 1e9 - age * 100))
+        folders.append(folder)
+    (tmp_path / "other").mkdir()  # not a cache folder: left alone
+    keep = tmp_path / "numba-11"  # the present version: kept whatever its age
+    removed = prune_cache_folders(tmp_path, keep, versions=3)
+    left = {path.name for path in tmp_path.iterdir()}
+    assert left == {"numba-0", "numba-1", "numba-11", "other"}
+    assert {path.name for path in removed} == {f"numba-{k}" for k in range(2, 11)}

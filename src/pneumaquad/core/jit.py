@@ -9,7 +9,9 @@ its own source file changes, but not when a function it calls (and inlines) in a
 file changes. The package's functions are therefore cached in a folder named by a hash of
 the whole package's source, so any edit or upgrade starts from a clean cache:
 ``<base>/numba-<hash>/``, where ``<base>`` is numba's own ``NUMBA_CACHE_DIR`` setting if
-one is given, else ``$XDG_CACHE_HOME/pneumaquad`` (``~/.cache/pneumaquad``).
+one is given, else ``$XDG_CACHE_HOME/pneumaquad`` (``~/.cache/pneumaquad``). The folders
+of older versions are pruned to the :data:`KEPT_VERSIONS` most recently used
+(:func:`prune_cache_folders`).
 
 Only the functions decorated with :data:`compiled` use that folder: each gets its own
 numba cache object whose locator names it. numba's process-wide configuration
@@ -22,6 +24,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, ClassVar
@@ -61,7 +64,34 @@ def cache_folder() -> Path:
     base = numba.config.CACHE_DIR or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "pneumaquad"
     )
-    return Path(base) / f"numba-{_source_hash()}"
+    folder = Path(base) / f"numba-{_source_hash()}"
+    prune_cache_folders(Path(base), keep=folder)
+    return folder
+
+
+#: How many source versions' cache folders :func:`prune_cache_folders` keeps.
+KEPT_VERSIONS = 8
+
+
+def prune_cache_folders(base: Path, keep: Path, versions: int = KEPT_VERSIONS) -> list[Path]:
+    """Remove the cache folders of old source versions: of the ``numba-*`` folders in
+    ``base``, all but the ``versions`` most recently used (modification time) and ``keep``
+    (the present version's, marked used now). Each edit or upgrade of the package starts a
+    new folder (tens of MB); without pruning they pile up. Folders that cannot be removed
+    (another process, permissions) are left. Returns the folders removed."""
+    try:
+        keep.mkdir(parents=True, exist_ok=True)
+        os.utime(keep)
+        folders = sorted((path for path in base.glob("numba-*") if path.is_dir()),
+                         key=lambda path: path.stat().st_mtime, reverse=True)
+    except OSError:  # a read-only or vanished cache: nothing to prune
+        return []
+    removed = []
+    for folder in [path for path in folders if path != keep][max(versions - 1, 0):]:
+        shutil.rmtree(folder, ignore_errors=True)
+        if not folder.exists():
+            removed.append(folder)
+    return removed
 
 
 class PackageCacheLocator(_SourceFileBackedLocatorMixin, _CacheLocator):
