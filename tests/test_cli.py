@@ -336,3 +336,25 @@ def test_default_run_folders_name_the_command(tmp_path: Path) -> None:
     names = sorted(folder.name for folder in (tmp_path / "runs").iterdir())
     assert len(names) == 2
     assert names[0].startswith("rig-step-") and names[1].startswith("rig-track-step-")
+
+
+def test_an_output_folder_with_files_needs_overwrite(tmp_path):
+    from typer.testing import CliRunner
+
+    from pneumaquad.cli.main import app
+
+    runner = CliRunner()
+    step = ["rig", "step", "6 V", "--duration", "0.2 s", "--step-time", "0.1 s"]
+    occupied = tmp_path / "old-run"
+    occupied.mkdir()
+    (occupied / "video.mp4").write_bytes(b"old")
+    refused = runner.invoke(app, [*step, "-o", str(occupied)])
+    assert refused.exit_code == 2
+    assert "--overwrite" in " ".join(refused.output.split())
+    assert sorted(path.name for path in occupied.iterdir()) == ["video.mp4"]  # untouched
+    accepted = runner.invoke(app, [*step, "-o", str(occupied), "--overwrite"])
+    assert accepted.exit_code == 0, accepted.output
+    assert (occupied / "summary.json").is_file()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert runner.invoke(app, [*step, "-o", str(empty)]).exit_code == 0

@@ -4,10 +4,12 @@ Sub-command modules (``cli_robot``, ``cli_serve``, ...) import from here, never 
 :mod:`pneumaquad.cli.main`, which registers them; so any of them can be imported first.
 """
 
+import functools
+import inspect
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -36,6 +38,7 @@ __all__ = [
     "option_range",
     "progress_bar",
     "quantity",
+    "refuse_occupied_output",
     "report_command_time",
     "simulated_duration",
 ]
@@ -63,6 +66,36 @@ SetOption = Annotated[
 OutputOption = Annotated[
     Path | None, typer.Option("--output", "-o", help="Run folder (default runs/<kind>-<time>).")
 ]
+
+OverwriteOption = Annotated[
+    bool, typer.Option("--overwrite", help="Write into an --output folder that already has "
+                       "files (they are replaced where the run writes the same names).")
+]
+
+
+def refuse_occupied_output(command: Callable[..., Any]) -> Callable[..., Any]:
+    """Give a run command (one with an ``output`` parameter) an ``--overwrite`` option and
+    refuse, before anything runs, an ``--output`` folder that exists and is not empty
+    without it: a run written into another run's folder would leave the old files (a
+    video, a model) beside the new ones."""
+    signature = inspect.signature(command, eval_str=True)
+    overwrite = inspect.Parameter("overwrite", inspect.Parameter.KEYWORD_ONLY, default=False,
+                                  annotation=OverwriteOption)
+
+    @functools.wraps(command)
+    def wrapper(*args: Any, overwrite: bool = False, **values: Any) -> Any:
+        output = values.get("output")
+        if output is not None and not overwrite and Path(output).is_dir() and any(
+                Path(output).iterdir()):
+            raise typer.BadParameter(
+                f"{output} already has files; pass --overwrite to write into it anyway, or "
+                "choose another folder (or none: runs/<kind>-<time>)", param_hint="--output")
+        return command(*args, **values)
+
+    parameters = [*signature.parameters.values(), overwrite]
+    wrapper.__signature__ = signature.replace(parameters=parameters)  # type: ignore[attr-defined]
+    return wrapper
+
 
 ProfileOption = Annotated[
     bool,

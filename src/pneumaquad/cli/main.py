@@ -28,6 +28,7 @@ from pneumaquad.cli.common import (
     option_range,
     progress_bar,
     quantity,
+    refuse_occupied_output,
     simulated_duration,
 )
 from pneumaquad.io.run_folder import create_run_folder
@@ -108,6 +109,7 @@ def params_check(
 
 
 @rig_app.command("step")
+@refuse_occupied_output
 def rig_step(
     voltage: Annotated[str, typer.Argument(help='Step command, e.g. "6.0 V".')],
     params: ParamsOption = "thesis-rig",
@@ -173,6 +175,7 @@ def held_voltages(text: str, valve_range: tuple[float, float]) -> list[float]:
 
 
 @rig_app.command("spacer")
+@refuse_occupied_output
 def rig_spacer(
     voltages: Annotated[
         str,
@@ -226,6 +229,7 @@ def rig_spacer(
 
 
 @rig_app.command("track")
+@refuse_occupied_output
 def rig_track(
     reference: Annotated[
         str, typer.Argument(help="Reference shape: sine, step, trapezoid, chirp or file.")

@@ -29,6 +29,7 @@ from pneumaquad.cli.common import (
     finish_run,
     option_range,
     progress_bar,
+    refuse_occupied_output,
     report_command_time,
 )
 from pneumaquad.cli.settings import option_names, settings_options
@@ -275,6 +276,7 @@ def _wait_for_video(worker: VideoWorker | None, folder: Path,
 
 
 @leg_app.command("validate")
+@refuse_occupied_output
 def leg_validate(
     joint: Annotated[
         str, typer.Option(help="Tested joint: alpha, beta, gamma, or all.")
@@ -326,6 +328,7 @@ def leg_validate(
 
 
 @leg_app.command("foot-cycle")
+@refuse_occupied_output
 def leg_foot_cycle(
     rate: Annotated[str, typer.Option(help="slow, medium, fast or all.")] = "all",
     cycles: Annotated[int, typer.Option(help="Cycles per rate, 1 to 1000.",
@@ -361,6 +364,7 @@ def leg_foot_cycle(
 
 
 @robot_app.command("stand")
+@refuse_occupied_output
 def robot_stand(
     hold: Annotated[float, typer.Option(help="Holding time after rising [s], 0 to 3600.",
                                         callback=option_range(PHASE_TIME))] = 3.0,
@@ -415,6 +419,7 @@ def robot_stand(
 
 @robot_app.command("walk")
 @settings_options(WalkSettings, WALK_SETTINGS)
+@refuse_occupied_output
 def robot_walk(
     settings: WalkSettings,
     environment: EnvironmentOption = "flat",

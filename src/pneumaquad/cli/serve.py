@@ -25,6 +25,7 @@ from pneumaquad.cli.common import (
     check_step_count,
     console,
     option_range,
+    refuse_occupied_output,
 )
 from pneumaquad.params import ParameterError
 from pneumaquad.params.schema import Bounds
@@ -100,6 +101,7 @@ BusyWaitOption = Annotated[
 
 
 @serve_app.command("dynamics")
+@refuse_occupied_output
 def serve_dynamics(
     params: ParamsOption = "crr-quadruped",
     overrides: SetOption = None,
@@ -207,6 +209,7 @@ def _serve_thesis(params: str, overrides: list[str] | None, configuration: str, 
 
 
 @serve_app.command("actuators")
+@refuse_occupied_output
 def serve_actuators(
     dynamics: Annotated[str, typer.Option(help="Dynamics server HOST:PORT.")]
     = "127.0.0.1:47000",
