@@ -236,3 +236,15 @@ def test_capsule_mesh_is_closed_and_sized() -> None:
     assert vertices[:, 2].min() == pytest.approx(-0.4)
     assert np.max(np.linalg.norm(vertices[:, :2], axis=1)) == pytest.approx(0.1, abs=1e-6)
     assert faces.max() < len(vertices)
+
+
+def test_the_free_robot_starts_standing_on_its_feet(quadruped: ConsoleApp) -> None:
+    """The console's reset pose has settled: every foot carries load, together the
+    robot's weight, at t = 0."""
+    _press(quadruped.controls.reset_button)
+    simulation = quadruped.simulation
+    assert simulation.time == 0.0
+    normal = simulation.foot_normal_forces()
+    weight = simulation.model.body_mass.sum() * 9.81
+    assert np.all(normal > 0.15 * weight)
+    assert normal.sum() == pytest.approx(weight, rel=0.05)

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import viser
 
+from pneumaquad.core.layout import SUPPLY_TANK
 from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
@@ -42,6 +43,9 @@ from .walking import ConsoleWalking
 __all__ = ["ConsoleApp", "initial_pose"]
 
 #: Extra clearance of the feet above the ground at reset [m].
+#: Simulated time [s] a free robot stands before the console shows it: it is placed 3 mm
+#: above the ground and lands on its feet (all four loaded after about 0.3 s).
+SETTLE_TIME = 1.0
 _DROP_CLEARANCE = 0.003
 
 
@@ -50,7 +54,9 @@ def initial_pose(simulation: RobotSimulation) -> np.ndarray:
 
     Every leg at the walking angles of :mod:`pneumaquad.locomotion.walking` (the neutral
     stance of the crawl, with room to step and sway); a free robot is placed with its
-    feet just above flat ground; all joints closed-loop at that pose.
+    feet just above flat ground and simulated for :data:`SETTLE_TIME` so that it starts
+    standing on its feet (the clock then starts from 0, and the air counter of a regulated
+    supply too); all joints closed-loop at that pose.
     """
     robot = simulation.robot
     angles = np.tile(WALKING_ANGLES, len(robot.legs))
@@ -60,6 +66,16 @@ def initial_pose(simulation: RobotSimulation) -> np.ndarray:
     else:
         simulation.set_pose(angles)
     simulation.command_angles(angles)
+    if robot.free:
+        simulation.step(round(SETTLE_TIME / simulation.control_step))
+        # the console's clock and air counter start with the robot standing (a tank keeps
+        # its count: its pressure has dropped by the air drawn)
+        simulation.data.time = 0.0
+        simulation.steps_taken = 0
+        bank = simulation.bank
+        if np.all(bank.supply["model"] != SUPPLY_TANK):
+            bank.state["air_consumed"] = 0.0
+            bank.supply["drawn_mass"] = 0.0
     return angles
 
 
