@@ -27,10 +27,12 @@ __all__ = [
     "MAX_WALL_TIME",
     "SIMULATED_DURATION",
     "WALL_DURATION",
+    "AllowRemoteOption",
     "OutputOption",
     "ParamsOption",
     "ProfileOption",
     "SetOption",
+    "check_bind",
     "check_step_count",
     "command_clock",
     "console",
@@ -66,6 +68,34 @@ SetOption = Annotated[
 OutputOption = Annotated[
     Path | None, typer.Option("--output", "-o", help="Run folder (default runs/<kind>-<time>).")
 ]
+
+AllowRemoteOption = Annotated[
+    bool, typer.Option("--allow-remote", help="Allow binding an address other than "
+                       "loopback (there is no authentication: anyone who reaches it controls "
+                       "the simulation).")
+]
+
+
+def check_bind(host: str, allow_remote: bool, option: str) -> None:
+    """Refuse a non-loopback bind address without ``--allow-remote``; with it, print a
+    warning naming the address. Loopback: ``localhost`` and the 127.0.0.0/8 and ::1
+    addresses."""
+    import ipaddress
+
+    try:
+        loopback = host == "localhost" or ipaddress.ip_address(host).is_loopback
+    except ValueError:  # a host name other than localhost
+        loopback = False
+    if loopback:
+        return
+    if not allow_remote:
+        raise typer.BadParameter(
+            f"{host!r} is not a loopback address: the service has no authentication, so "
+            "anyone who reaches it controls the simulation; pass --allow-remote to bind it "
+            "anyway (or use 127.0.0.1 behind an authenticating proxy)", param_hint=option)
+    console.print(f"[yellow]warning: listening on {host}, reachable from the network, "
+                  "without authentication[/yellow]", highlight=False)
+
 
 OverwriteOption = Annotated[
     bool, typer.Option("--overwrite", help="Write into an --output folder that already has "

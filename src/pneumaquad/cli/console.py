@@ -11,7 +11,14 @@ from typing import Annotated
 
 import typer
 
-from pneumaquad.cli.common import WALL_DURATION, SetOption, console, option_range
+from pneumaquad.cli.common import (
+    WALL_DURATION,
+    AllowRemoteOption,
+    SetOption,
+    check_bind,
+    console,
+    option_range,
+)
 from pneumaquad.io.interruption import deferred_interrupt
 from pneumaquad.params.schema import Bounds
 
@@ -108,7 +115,9 @@ def console_command(
         typer.Option("--device-port", help="UDP port for external input devices (0: any).",
                      callback=option_range(_PORT_RANGE)),
     ] = None,
+    allow_remote: AllowRemoteOption = False,
 ) -> None:
     """Operator console in the browser: live 3-D robot, run controls, teleoperation."""
+    check_bind(host, allow_remote, "--host")
     serve_console(params, configuration, environment, host, port, duration, overrides, start,
                   replay, device_port)

@@ -20,8 +20,10 @@ import typer
 from pneumaquad.cli.common import (
     SIMULATED_DURATION,
     WALL_DURATION,
+    AllowRemoteOption,
     OutputOption,
     SetOption,
+    check_bind,
     check_step_count,
     console,
     option_range,
@@ -130,8 +132,10 @@ def serve_dynamics(
                           "R1 torques in, lockstep).")
     ] = "pnqd",
     output: OutputOption = None,
+    allow_remote: AllowRemoteOption = False,
 ) -> None:
     """Serve the robot's dynamics over UDP until BYE, --duration or Ctrl-C."""
+    check_bind(bind, allow_remote, "--bind")
     if layout == "thesis":
         _serve_thesis(params, overrides, configuration, bind, port, peer, duration, posture,
                       output)
