@@ -459,3 +459,15 @@ def test_rejects_file_that_is_not_utf8(tmp_path: Path) -> None:
     message = str(info.value)
     assert "is not UTF-8 text (byte 0xe9 at offset 16)" in message
     assert str(path) in message
+
+
+def test_shown_parameters_are_rounded_and_still_load():
+    from pneumaquad.params import load_rig
+    from pneumaquad.params.loader import resolved_parameters_toml
+
+    setup = load_rig("thesis-rig")
+    exact = resolved_parameters_toml(setup)
+    shown = resolved_parameters_toml(setup, digits=12)
+    assert '"0.0020000000000000005 m^3"' in exact  # 2 L converted to m^3
+    assert '"0.002 m^3"' in shown and "0.0020000000000000005" not in shown
+    assert '"448159.224056 Pa"' in shown

@@ -94,8 +94,14 @@ def params_list() -> None:
 def params_show(
     name: Annotated[str, typer.Argument(help="Set name or TOML path.")], overrides: SetOption = None
 ) -> None:
-    """Print a parameter set resolved to SI (loadable again with --params)."""
-    sys.stdout.write(resolved_parameters_toml(load_parameter_set(name, overrides or [])))
+    """Print a parameter set resolved to SI (loadable again with --params), numbers to 12
+    significant digits (a run folder's parameters.toml keeps them exact)."""
+    sys.stdout.write(resolved_parameters_toml(load_parameter_set(name, overrides or []),
+                                              digits=PARAMETER_DIGITS))
+
+
+#: Significant digits of the numbers ``params show`` prints.
+PARAMETER_DIGITS = 12
 
 
 @params_app.command("check")
