@@ -461,7 +461,7 @@ def test_rejects_file_that_is_not_utf8(tmp_path: Path) -> None:
     assert str(path) in message
 
 
-def test_shown_parameters_are_rounded_and_still_load():
+def test_shown_parameters_are_rounded_and_still_load(tmp_path):
     from pneumaquad.params import load_rig
     from pneumaquad.params.loader import resolved_parameters_toml
 
@@ -471,3 +471,8 @@ def test_shown_parameters_are_rounded_and_still_load():
     assert '"0.0020000000000000005 m^3"' in exact  # 2 L converted to m^3
     assert '"0.002 m^3"' in shown and "0.0020000000000000005" not in shown
     assert '"448159.224056 Pa"' in shown
+    path = tmp_path / "shown.toml"
+    path.write_text(shown, encoding="utf-8")
+    again = load_rig(path)
+    assert again.actuator.supply.supply_pressure == pytest.approx(
+        setup.actuator.supply.supply_pressure, rel=1e-11)
