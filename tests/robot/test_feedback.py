@@ -23,10 +23,12 @@ GRAVITY = 9.81  # [m/s^2], the model's |g|
 
 
 def _standing(configuration: str) -> RobotSimulation:
-    """The console's reset pose, then 1 s of closed-loop holding (settled)."""
+    """The console's reset pose after 1 s of closed-loop holding (the free robot's reset
+    pose is settled for 1 s already)."""
     simulation = RobotSimulation(build_robot(load_robot("crr-quadruped"), configuration, "flat"))
     initial_pose(simulation)
-    simulation.step(1000)
+    if not simulation.robot.free:
+        simulation.step(1000)
     return simulation
 
 
