@@ -408,8 +408,7 @@ def feet() -> None:
     from pneumaquad.robot.feedback import foot_feedback
 
     sim = _simulation(configuration="quadruped")
-    initial_pose(sim)
-    sim.step(1000)
+    initial_pose(sim)  # settled for 1 s: the console's reset pose
     weight = mujoco.mj_getTotalmass(sim.model) * -sim.model.opt.gravity[2]
     total = foot_feedback(sim).contact.sum(axis=0)
     print(f"console reset pose after 1 s (tests/robot/test_feedback.py): feet contact z "
