@@ -40,14 +40,20 @@ from pneumaquad.params import (
 )
 from pneumaquad.params.loader import load_parameter_set
 from pneumaquad.params.schema import Bounds, RigSetup
-from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals
 from pneumaquad.rig.signals import RecordedReferenceError
-from pneumaquad.rig.simulate import ReferenceSolverError, RigDivergedError
 from pneumaquad.robot.errors import SimulationDivergedError
-from pneumaquad.robot.video import VideoError
 
-USER_ERRORS = (ParameterError, RecordedReferenceError, ReferenceSolverError, RigDivergedError)
+
+def user_errors() -> tuple[type[Exception], ...]:
+    """The errors that are the user's input (a message and exit status 2, no traceback);
+    imported when one is raised, so that ``--help`` loads none of the simulators."""
+    from pneumaquad.rig.recording import RigDivergedError
+    from pneumaquad.rig.reference import ReferenceSolverError
+    from pneumaquad.robot.video import VideoError
+
+    return (ParameterError, RecordedReferenceError, ReferenceSolverError, RigDivergedError,
+            VideoError, SimulationDivergedError)
 
 app = typer.Typer(
     help="pneumaquad: simulator for pneumatically actuated legged robots.",
@@ -147,6 +153,8 @@ def rig_step(
         total,
     )
     folder = create_run_folder(output, "rig-step")
+    from pneumaquad.reporting.rig_experiment import run_rig_experiment
+
     with progress_bar("rig step") as update:
         _, summary = run_rig_experiment(
             setup, folder, signal, False, f"open-loop step to {command:g} V", at, update,
@@ -219,6 +227,8 @@ def rig_spacer(
     signal = signals.step_train(levels, hold, control_step)
     shown = ", ".join(f"{value:g} V" for value in levels)
     folder = create_run_folder(output, "rig-spacer")
+    from pneumaquad.reporting.rig_experiment import run_rig_experiment
+
     with progress_bar("rig spacer") as update:
         _, summary = run_rig_experiment(
             setup,
@@ -287,6 +297,8 @@ def rig_track(
         position_unit,
     )
     folder = create_run_folder(output, f"rig-track-{reference}")
+    from pneumaquad.reporting.rig_experiment import run_rig_experiment
+
     with progress_bar(f"rig track {reference}") as update:
         _, summary = run_rig_experiment(
             setup, folder, signal, True, f"closed-loop {reference} tracking", None, update,
@@ -459,7 +471,9 @@ def main() -> None:
     """Entry point: run the app; user errors print a message and exit with status 2."""
     try:
         app()
-    except (*USER_ERRORS, VideoError, SimulationDivergedError) as error:
+    except Exception as error:
+        if not isinstance(error, user_errors()):
+            raise
         console.print("error:", style="bold red", end=" ")
         console.print(str(error), highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)

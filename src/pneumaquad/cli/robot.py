@@ -34,8 +34,7 @@ from pneumaquad.cli.common import (
 )
 from pneumaquad.cli.settings import option_names, settings_options
 from pneumaquad.io.stage_clock import StageClock
-from pneumaquad.locomotion.walk_run import WALK_SETTINGS
-from pneumaquad.locomotion.walking import WalkSettings
+from pneumaquad.locomotion.walk_settings import WALK_SETTINGS, WalkSettings
 from pneumaquad.params import JOINT_NAMES, load_robot
 from pneumaquad.params.schema import Bounds
 from pneumaquad.robot.video import (

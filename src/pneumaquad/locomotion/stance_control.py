@@ -30,8 +30,6 @@ module with array arguments are its reference in NumPy.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -47,42 +45,13 @@ from .stance_kernels import (
     stance_views,
     stance_workspace,
 )
+from .walk_settings import StanceControlSettings
 
 __all__ = ["StanceControlSettings", "StanceController", "StanceLoads",
            "cylinder_forces_for_foot_force", "desired_normal_forces", "load_shares",
            "track_stance_loads"]
 
 Array = NDArray[np.float64]
-
-
-@dataclass(frozen=True)
-class StanceControlSettings:
-    """Settings of the force-controlled stance.
-
-    Attributes
-    ----------
-    force_gain : float [V/N]
-        Valve voltage per newton of cylinder force error (force tracking gain k_F). The
-        position loop then acts as a spring of stiffness·Kp / k_F: with beta's Kp =
-        150 V/m, 0.015 V/N and the stiffness factor 2, 20 N/mm at the piston. 0.015 V/N
-        from walks on the three terrains (docs/robot.md); 0.01 V/N rocked more on the ramp.
-    rise : float
-        Cycle fraction over which a leg's load share rises after touchdown.
-    fall : float
-        Cycle fraction over which it falls before lift-off.
-    """
-
-    force_gain: float = 0.015
-    rise: float = 0.01
-    fall: float = 0.04
-    stiffness: float = 2.0
-
-    def __post_init__(self) -> None:
-        if not self.force_gain > 0.0:
-            raise ValueError(f"force_gain must be > 0 V/N, got {self.force_gain!r}")
-        if not (0.0 < self.rise < 0.5 and 0.0 < self.fall < 0.5):
-            raise ValueError(f"rise and fall must be cycle fractions in (0, 0.5), got "
-                             f"{self.rise!r} and {self.fall!r}")
 
 
 def load_shares(phases: ArrayLike, duty_factor: float, rise: float, fall: float) -> Array:

@@ -22,8 +22,6 @@ import numpy as np
 
 from pneumaquad.io.run_folder import RunFolderWriter, create_run_folder
 from pneumaquad.io.stage_clock import StageClock
-from pneumaquad.params.schema import Bounds
-from pneumaquad.params.settings import Setting, check_settings
 from pneumaquad.reporting.robot_plots import plot_walking
 from pneumaquad.robot.experiment import Phase, RobotRun, run_phases
 from pneumaquad.robot.simulation import RobotSimulation
@@ -31,8 +29,15 @@ from pneumaquad.robot.simulation import RobotSimulation
 from .capacity import check_supply
 from .reach import UnreachablePlanError
 from .walk import WalkPlan
-from .walking import (
+from .walk_settings import (
+    GAIT_FIELDS,
+    REACH_FIELDS,
+    WALK_SETTINGS,
     WalkSettings,
+    WalkSettingsError,
+    check_walk_settings,
+)
+from .walking import (
     leg_posture,
     reachable_settings,
     tip_over_series,
@@ -46,63 +51,6 @@ __all__ = ["GAIT_FIELDS", "REACH_FIELDS", "WALKING_FIGURE", "WALK_SETTINGS", "Ju
 
 #: The walking figure of a judged walk's run folder.
 WALKING_FIGURE = "walking.png"
-
-
-def _closed(lower: float, upper: float, unit: str = "") -> Bounds:
-    return Bounds(lower, upper, unit, lower_inclusive=True)
-
-
-#: What each field of :class:`.walking.WalkSettings` sets and the values it takes; the
-#: ``robot walk`` options are built from these and the dataclass's defaults.
-WALK_SETTINGS: dict[str, Setting] = {
-    "distance": Setting("Distance to walk", _closed(0.01, 100.0, "m")),
-    "speed": Setting("Body speed", _closed(0.001, 1.0, "m/s")),
-    "heading": Setting("Walking direction, counter-clockwise from forward",
-                       _closed(-360.0, 360.0, "deg"), scale=math.pi / 180.0),
-    "duty_factor": Setting("Stance fraction of the gait cycle", _closed(0.75, 0.99)),
-    "period": Setting("Gait cycle", _closed(0.5, 600.0, "s")),
-    "minimum_margin": Setting("Planned static margin", _closed(0.0, 1.0, "m"),
-                              option="margin"),
-    "step_height": Setting("Foot lift at mid-swing", _closed(0.0, 0.5, "m")),
-    "lift_fraction": Setting("Share of the swing, at each end, spent only lifting or "
-                             "lowering the foot", _closed(0.0, 0.49)),
-    "transfer_gap": Setting("Cycle fraction with four feet down between a rear touchdown "
-                            "and the front lift-off (load transfer)", _closed(0.0, 0.5)),
-    "stance_control": Setting(
-        "Force-controlled stance: each stance leg's cylinders track the load statics gives "
-        "it (locomotion.stance_control); off: plain position control",
-        nested={"force_gain": Setting("Force tracking gain of the stance cylinders",
-                                      _closed(1e-6, 1.0, "V/N"))}),
-    "swing_from_ground": Setting("Swing height above the ground at lift-off "
-                                 "(locomotion.swing_control), or relative to the body as "
-                                 "planned", off_option="swing-from-body"),
-    "heading_hold": Setting("Hold the initial heading (locomotion.heading_control)"),
-    "turn": Setting("Turn in place by this angle, counter-clockwise (0: walk the distance)",
-                    _closed(-720.0, 720.0, "deg"), scale=math.pi / 180.0),
-    "yaw_rate": Setting("Body yaw rate, counter-clockwise: walking, an arc; turning in "
-                        "place, its rate (0 there: 2 deg/s)",
-                        _closed(-10.0, 10.0, "deg/s"), scale=math.pi / 180.0),
-}
-
-#: The settings the gait's own checks (:class:`pneumaquad.gait.crawl.CrawlGait`,
-#: :func:`pneumaquad.gait.crawl.sway_for_margin`) weigh against each other.
-GAIT_FIELDS = ("duty_factor", "lift_fraction", "transfer_gap", "minimum_margin")
-#: The settings that decide whether the legs reach the plan (:mod:`.reach`).
-REACH_FIELDS = ("heading", "speed", "period", "step_height")
-
-
-class WalkSettingsError(ValueError):
-    """Walk settings out of range, or that the gait cannot meet.
-
-    Attributes
-    ----------
-    fields : tuple of str
-        The :class:`.walking.WalkSettings` fields concerned.
-    """
-
-    def __init__(self, message: str, fields: tuple[str, ...]) -> None:
-        super().__init__(message)
-        self.fields = fields
 
 
 @dataclass
@@ -135,21 +83,6 @@ class JudgedWalk:
     def folder(self) -> Path:
         """The run folder."""
         return self.run.folder
-
-
-def check_walk_settings(settings: WalkSettings) -> None:
-    """Check every field of ``settings`` against its range in :data:`WALK_SETTINGS`.
-
-    Raises
-    ------
-    WalkSettingsError
-        Naming the field, the value and the range.
-    """
-    for name, description in WALK_SETTINGS.items():
-        try:
-            check_settings(settings, {name: description})
-        except ValueError as error:
-            raise WalkSettingsError(str(error), (name,)) from None
 
 
 def plan_walking(simulation: RobotSimulation,

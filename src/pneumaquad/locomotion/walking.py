@@ -12,13 +12,12 @@ limit, or lost static stability.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from pneumaquad.gait.crawl import CrawlGait
-from pneumaquad.gait.settings import CrawlSettings
 from pneumaquad.gait.stability import STANCE_FORCE, support_margins
 from pneumaquad.locomotion.walk import WalkPlan, plan_walk, robot_gait
 from pneumaquad.robot.builder import RobotModel
@@ -31,10 +30,13 @@ from pneumaquad.robot.stand_up import smooth_ramp
 from .capacity import rise_in_pairs
 from .heading_control import HeadingHold
 from .reach import REACH_TOLERANCE, check_reach, choose_posture, plan_miss
-from .stance_control import StanceController, StanceControlSettings
+from .stance_control import StanceController
 from .swing_control import SwingHeightCorrection
+from .walk_settings import TURN_RATE, TURN_TOLERANCE, WalkSettings
 
 __all__ = [
+    "TURN_RATE",
+    "TURN_TOLERANCE",
     "WALKING_ANGLES",
     "WalkSettings",
     "contact_slide",
@@ -49,67 +51,6 @@ __all__ = [
 #: Alpha, beta, gamma [rad] the gait is planned about: every IK sample stays reachable
 #: (the standing gamma of 90° is too close to its 95° limit to lift and sway).
 WALKING_ANGLES = np.radians([0.0, -20.0, 80.0])
-#: Yaw rate [rad/s] of a turn in place when none is given: 2°/s, a 14° turn of the feet
-#: about the body per stance of the default 8 s cycle (about the default stride's 0.144 m
-#: at the feet's 0.5 m from the body's centre).
-TURN_RATE = math.radians(2.0)
-#: Largest error of a turn in place [rad] (yaw at the end of the run, from the yaw the
-#: robot lay in) that succeeds.
-TURN_TOLERANCE = math.radians(5.0)
-
-
-@dataclass(frozen=True)
-class WalkSettings(CrawlSettings):
-    """Gait settings: step height [m] and planned minimum static margin [m] (with their
-    defaults from :class:`pneumaquad.gait.settings.CrawlSettings`, which the console's
-    online crawl shares), speed [m/s], heading [rad], duty factor, period [s], distance
-    to walk [m], the swing's share of pure lift and lowering and the four-legged transfer
-    gap before each front lift-off (cycle fractions,
-    :class:`pneumaquad.gait.crawl.CrawlGait`), the force-controlled stance (None: plain
-    position control of the planned joint angles) and the swing and heading corrections.
-    Defaults: the settings that walked every terrain in our measurements (docs/robot.md)."""
-
-    speed: float = 0.02
-    heading: float = 0.0
-    duty_factor: float = 0.9
-    period: float = 8.0
-    distance: float = 1.0
-    lift_fraction: float = 0.25
-    transfer_gap: float = 0.04
-    stance_control: StanceControlSettings | None = field(
-        default_factory=StanceControlSettings)
-    swing_from_ground: bool = True
-    heading_hold: bool = True
-    turn: float = 0.0
-    yaw_rate: float = 0.0
-
-    @property
-    def turning_in_place(self) -> bool:
-        """A turn in place (``turn`` [rad] not 0): no travel, speed and distance unused."""
-        return self.turn != 0.0
-
-    def duration(self) -> float:
-        """Walking time [s]: the whole number of gait cycles (at least one) whose planned
-        body travel is nearest to the distance. A walk ends as it began, on four feet
-        with the body swayed to the same side, within half a cycle's travel
-        (speed·T/2, less than a stride) of the distance. A turn in place: the whole
-        number of cycles at ``|yaw_rate|`` (:data:`TURN_RATE` if 0) nearest to the turn,
-        the rate then adjusted so that they turn exactly by it."""
-        if self.turning_in_place:
-            rate = abs(self.yaw_rate) or TURN_RATE
-            cycles = max(1, round(abs(self.turn) / (rate * self.period)))
-        else:
-            cycles = max(1, round(self.distance / (self.speed * self.period)))
-        return cycles * self.period
-
-    def body_yaw_rate(self) -> float:
-        """Planned body yaw rate [rad/s] (counter-clockwise): the turn over the walk's
-        duration when turning in place, else ``yaw_rate`` (an arc; 0 straight)."""
-        return self.turn / self.duration() if self.turning_in_place else self.yaw_rate
-
-    def body_speed(self) -> float:
-        """Planned body speed [m/s]: 0 when turning in place, else ``speed``."""
-        return 0.0 if self.turning_in_place else self.speed
 
 
 def walking_gait(robot: RobotModel, settings: WalkSettings, angles: np.ndarray) -> CrawlGait:
