@@ -476,3 +476,27 @@ def test_shown_parameters_are_rounded_and_still_load(tmp_path):
     again = load_rig(path)
     assert again.actuator.supply.supply_pressure == pytest.approx(
         setup.actuator.supply.supply_pressure, rel=1e-11)
+
+
+def test_a_layered_file_changes_only_its_keys(tmp_path):
+    from pneumaquad.params import ParameterError, load_actuator
+
+    changes = tmp_path / "mine.toml"
+    changes.write_text('extends = "crr-gamma"\n[supply]\nsupply_pressure = "45 psig"\n'
+                       '[friction]\nstatic_force = "5 lbf"\n', encoding="utf-8")
+    deeper = tmp_path / "deeper.toml"  # extends the file beside it
+    deeper.write_text('extends = "mine.toml"\n[cylinder]\nbore = "1.25 in"\n',
+                      encoding="utf-8")
+    full = load_actuator("crr-gamma", ['supply.supply_pressure="45 psig"',
+                                       'friction.static_force="5 lbf"',
+                                       'cylinder.bore="1.25 in"'])
+    assert load_actuator(deeper) == full
+    assert load_actuator(changes).cylinder == load_actuator("crr-gamma").cylinder
+    loop = tmp_path / "loop.toml"
+    loop.write_text('extends = "loop.toml"\n', encoding="utf-8")
+    with pytest.raises(ParameterError, match="a loop"):
+        load_actuator(loop)
+    unknown = tmp_path / "unknown.toml"
+    unknown.write_text('extends = "crr-delta"\n', encoding="utf-8")
+    with pytest.raises(ParameterError, match=r"extends: 'crr-delta' is not a shipped"):
+        load_actuator(unknown)

@@ -111,6 +111,52 @@ def _parse_override_value(text: str) -> Any:
         return text
 
 
+#: Top-level key of a parameter file that names the set it changes (a shipped name, or a
+#: path relative to the file): the file then holds only the keys that differ.
+EXTENDS_KEY = "extends"
+
+
+def _merged(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
+    """``base`` with ``changes`` laid over it, table by table (a copy)."""
+    merged = dict(base)
+    for key, value in changes.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = _merged(merged[key], value)
+        else:
+            merged[key] = value
+    return merged
+
+
+def _read_layered(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """The raw tables of a parameter file, laid over the set it ``extends`` (recursively).
+
+    Raises
+    ------
+    ParameterError
+        For an ``extends`` that is not a string, names no set or file, or loops back.
+    """
+    raw = _read(path)
+    base = raw.pop(EXTENDS_KEY, None)
+    if base is None:
+        return raw
+    if not isinstance(base, str):
+        raise ParameterError([Problem(EXTENDS_KEY, base, "should be a parameter set name or "
+                                      "a path to a TOML file")], source=str(path))
+    try:
+        base_path = _resolve(base)
+    except ParameterError:
+        raise ParameterError([Problem(EXTENDS_KEY, base, "is not a shipped parameter set "
+                                      f"(one of: {', '.join(list_parameter_sets())}) nor a "
+                                      ".toml path")], source=str(path)) from None
+    if not base_path.is_absolute() and base_path.parent != DATA_DIR:
+        base_path = path.parent / base_path
+    resolved = base_path.resolve()
+    if resolved in chain or resolved == path.resolve():
+        raise ParameterError([Problem(EXTENDS_KEY, base, "extends a file that extends this "
+                                      "one (a loop)")], source=str(path))
+    return _merged(_read_layered(base_path, (*chain, path.resolve())), raw)
+
+
 def apply_overrides(raw: dict[str, Any], overrides: Iterable[str] = ()) -> dict[str, Any]:
     """Apply ``section.key=value`` overrides to a raw (unvalidated) parameter dict.
 
@@ -239,7 +285,7 @@ def _mounted_atmosphere(raw: dict[str, Any]) -> float | None:
     if not isinstance(mounting, dict) or not isinstance(mounting.get("gamma"), str):
         return None
     try:
-        return _raw_atmosphere(_read(_resolve(mounting["gamma"])))
+        return _raw_atmosphere(_read_layered(_resolve(mounting["gamma"])))
     except (OSError, ParameterError, ValueError):
         return None
 
@@ -314,7 +360,7 @@ def _load_raw(
     name_or_path: str | os.PathLike[str], overrides: Iterable[str]
 ) -> tuple[dict[str, Any], str]:
     path = _resolve(name_or_path)
-    raw = apply_overrides(_read(path), overrides)
+    raw = apply_overrides(_read_layered(path), overrides)
     return raw, str(path)
 
 
