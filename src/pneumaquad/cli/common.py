@@ -43,6 +43,7 @@ __all__ = [
     "refuse_occupied_output",
     "report_command_time",
     "simulated_duration",
+    "stderr_console",
 ]
 
 #: Longest simulated time of one run [s] (one hour).
@@ -56,7 +57,11 @@ SIMULATED_DURATION = Bounds(0.0, MAX_SIMULATED_TIME, "s")
 #: Range of a wall-clock duration option: (0, 86400 s].
 WALL_DURATION = Bounds(0.0, MAX_WALL_TIME, "s")
 
-console = Console(stderr=True)
+#: Results (figures, summaries, where files were written): standard output, so that
+#: ``> file`` keeps them.
+console = Console()
+#: Progress, warnings and errors: standard error.
+stderr_console = Console(stderr=True)
 
 ParamsOption = Annotated[
     str, typer.Option("--params", "-p", help="Shipped set name or path to a TOML file.")
@@ -93,7 +98,7 @@ def check_bind(host: str, allow_remote: bool, option: str) -> None:
             f"{host!r} is not a loopback address: the service has no authentication, so "
             "anyone who reaches it controls the simulation; pass --allow-remote to bind it "
             "anyway (or use 127.0.0.1 behind an authenticating proxy)", param_hint=option)
-    console.print(f"[yellow]warning: listening on {host}, reachable from the network, "
+    stderr_console.print(f"[yellow]warning: listening on {host}, reachable from the network, "
                   "without authentication[/yellow]", highlight=False)
 
 
@@ -151,7 +156,7 @@ def progress_bar(label: str) -> Iterator:
         TextColumn("{task.percentage:>3.0f}%"),
         TimeRemainingColumn(),
     )
-    with Progress(*columns, console=console, transient=True) as progress:
+    with Progress(*columns, console=stderr_console, transient=True) as progress:
         task = progress.add_task(label, total=None)
 
         def update(done: int, total: int) -> None:
@@ -253,7 +258,7 @@ def finish_run(folder: Path, summary: dict, clock: StageClock | None = None,
     if clock is not None:
         report_command_time(folder, summary, clock, profile)
     if summary.get("interrupted"):
-        console.print("[yellow]interrupted: the recording holds the part that ran[/yellow]")
+        stderr_console.print("[yellow]interrupted: the recording holds the part that ran[/yellow]")
         raise typer.Exit(130)
 
 

@@ -18,6 +18,7 @@ from pneumaquad.cli.common import (
     check_bind,
     console,
     option_range,
+    stderr_console,
 )
 from pneumaquad.io.interruption import deferred_interrupt
 from pneumaquad.params.schema import Bounds
@@ -58,13 +59,13 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
         server = app.devices.server
         console.print(f"Input devices: UDP {server.host}:{server.port}")
     if app.host not in ("127.0.0.1", "::1", "localhost"):
-        console.print(f"[yellow]warning:[/] bound to {app.host}: anyone who can reach this "
+        stderr_console.print(f"[yellow]warning:[/] bound to {app.host}: anyone who can reach this "
                       "port can drive the simulation (no authentication)")
     if replay is not None:
         if app.open_run(replay):
             console.print(f"Replaying {replay}")
         else:
-            console.print(f"[yellow]warning:[/] {app.message}")
+            stderr_console.print(f"[yellow]warning:[/] {app.message}")
     elif start:
         app.start()
     keyboard = KeyboardControl(

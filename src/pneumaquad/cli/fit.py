@@ -24,7 +24,7 @@ from rich.table import Table
 
 from pneumaquad.analysis import find_steps
 from pneumaquad.analysis.fits import FitResult, check_standard_errors, format_r_squared
-from pneumaquad.cli.common import ParamsOption, SetOption, console
+from pneumaquad.cli.common import ParamsOption, SetOption, console, stderr_console
 from pneumaquad.identification.equivalent_area import AREA_MODES, START_TEMPERATURE_SOURCES
 from pneumaquad.identification.friction import (
     FrictionPoints,
@@ -89,8 +89,8 @@ def user_errors() -> Iterator[None]:
     try:
         yield
     except USER_ERRORS as error:
-        console.print("error:", style="bold red", end=" ")
-        console.print(str(error), highlight=False, markup=False, soft_wrap=True)
+        stderr_console.print("error:", style="bold red", end=" ")
+        stderr_console.print(str(error), highlight=False, markup=False, soft_wrap=True)
         raise typer.Exit(2) from None
 
 
@@ -98,7 +98,7 @@ def user_errors() -> Iterator[None]:
 def progress_bar(label: str, total: int) -> Iterator[Any]:
     """A transient rich progress bar on stderr; yields a function advancing it by one."""
     columns = (TextColumn(label), BarColumn(), MofNCompleteColumn())
-    with Progress(*columns, console=console, transient=True) as progress:
+    with Progress(*columns, console=stderr_console, transient=True) as progress:
         task = progress.add_task(label, total=total)
         yield lambda: progress.advance(task)
 
@@ -182,8 +182,8 @@ def refuse_failed_fits(fits: Sequence[FitResult], force: bool) -> None:
             highlight=False,
         )
         return
-    console.print("error:", style="bold red", end=" ")
-    console.print(
+    stderr_console.print("error:", style="bold red", end=" ")
+    stderr_console.print(
         f"{len(failed)} fit(s) failed their checks ({names}): see the 'failed:' lines "
         "above. No parameter file written (--force writes it anyway).",
         highlight=False,

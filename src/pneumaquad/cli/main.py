@@ -30,6 +30,7 @@ from pneumaquad.cli.common import (
     quantity,
     refuse_occupied_output,
     simulated_duration,
+    stderr_console,
 )
 from pneumaquad.io.run_folder import create_run_folder
 from pneumaquad.params import (
@@ -474,6 +475,6 @@ def main() -> None:
     except Exception as error:
         if not isinstance(error, user_errors()):
             raise
-        console.print("error:", style="bold red", end=" ")
-        console.print(str(error), highlight=False, markup=False, soft_wrap=True)
+        stderr_console.print("error:", style="bold red", end=" ")
+        stderr_console.print(str(error), highlight=False, markup=False, soft_wrap=True)
         sys.exit(2)

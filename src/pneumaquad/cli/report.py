@@ -14,7 +14,13 @@ from typing import Annotated
 
 import typer
 
-from pneumaquad.cli.common import MAX_SIMULATED_TIME, console, option_range, progress_bar
+from pneumaquad.cli.common import (
+    MAX_SIMULATED_TIME,
+    console,
+    option_range,
+    progress_bar,
+    stderr_console,
+)
 from pneumaquad.io.measured import MeasuredDataError
 from pneumaquad.params import ParameterError
 from pneumaquad.params.schema import Bounds
@@ -28,8 +34,8 @@ REPORT_ERRORS = (ReportError, ParameterError, MeasuredDataError)
 
 
 def _fail(error: Exception) -> None:
-    console.print("error:", style="bold red", end=" ")
-    console.print(str(error), highlight=False, markup=False, soft_wrap=True)
+    stderr_console.print("error:", style="bold red", end=" ")
+    stderr_console.print(str(error), highlight=False, markup=False, soft_wrap=True)
     raise typer.Exit(2)
 
 

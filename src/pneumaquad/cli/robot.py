@@ -31,6 +31,7 @@ from pneumaquad.cli.common import (
     progress_bar,
     refuse_occupied_output,
     report_command_time,
+    stderr_console,
 )
 from pneumaquad.cli.settings import option_names, settings_options
 from pneumaquad.io.stage_clock import StageClock
@@ -130,7 +131,7 @@ def _start_video(video: bool, fps: float, quality: str) -> VideoWorker | None:
         return VideoWorker(VideoSettings(fps=fps, quality=quality, gif=video))
     except OSError as error:
         what = "video" if video else "first-frame.png"
-        console.print(f"[yellow]no {what}: cannot start the video worker: {error}[/yellow]")
+        stderr_console.print(f"[yellow]no {what}: cannot start the video worker: {error}[/yellow]")
         return None
 
 
@@ -235,7 +236,7 @@ def _print_checks(summary: dict[str, Any]) -> None:
             highlight=False)
     stopped = summary.get("stopped before")
     if stopped is not None:
-        console.print(f"[yellow]stopped before {stopped['phase']}: {stopped['reason']}"
+        stderr_console.print(f"[yellow]stopped before {stopped['phase']}: {stopped['reason']}"
                       "[/yellow]", highlight=False)
 
 
@@ -264,10 +265,10 @@ def _wait_for_video(worker: VideoWorker | None, folder: Path,
             rendered = worker.wait(update)
     except KeyboardInterrupt:
         hint = "" if first_frame_only else f"; `pneumaquad video {folder}` renders it"
-        console.print(f"[yellow]no {what}: interrupted{hint}[/yellow]")
+        stderr_console.print(f"[yellow]no {what}: interrupted{hint}[/yellow]")
         return False
     except (RenderingUnavailableError, VideoError, VideoWorkerError) as error:
-        console.print(f"[yellow]no {what}: {error}[/yellow]")
+        stderr_console.print(f"[yellow]no {what}: {error}[/yellow]")
         return True
     console.print(f"video: {rendered.mp4} ({rendered.frames} frames at "
                   f"{worker.settings.fps:g} frames/s, {worker.settings.quality} quality)")
@@ -600,9 +601,9 @@ def video_command(
             with progress_bar("video frames") as update:
                 rendered = worker.wait(update)
         except RenderingUnavailableError as error:
-            console.print(f"[yellow]no video: {error}[/yellow]")
+            stderr_console.print(f"[yellow]no video: {error}[/yellow]")
             return
         except VideoWorkerError as error:
-            console.print(f"[red]no video: {error}[/red]")
+            stderr_console.print(f"[red]no video: {error}[/red]")
             raise typer.Exit(1) from None
     console.print(f"video: {rendered.mp4} ({rendered.frames} frames)")

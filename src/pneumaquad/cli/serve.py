@@ -28,6 +28,7 @@ from pneumaquad.cli.common import (
     console,
     option_range,
     refuse_occupied_output,
+    stderr_console,
 )
 from pneumaquad.params import ParameterError
 from pneumaquad.params.schema import Bounds
@@ -44,8 +45,8 @@ ConfigurationOption = Annotated[
 
 
 def _fail(message: str, status: int = 2) -> None:
-    console.print("[red]error:[/red] ", end="", highlight=False)
-    console.print(message, markup=False, highlight=False)
+    stderr_console.print("[red]error:[/red] ", end="", highlight=False)
+    stderr_console.print(message, markup=False, highlight=False)
     raise typer.Exit(status)
 
 
@@ -179,7 +180,7 @@ def serve_dynamics(
 def _end_of_server_run(summary: dict, interrupted: bool) -> None:
     """Exit 130 after Ctrl-C, 1 after a run the server ended on a diverged state."""
     if interrupted:
-        console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
+        stderr_console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
         raise typer.Exit(130)
     if "error" in summary:
         _fail(f"{summary['error']} (the last good state was held and the run ended; the "
@@ -285,6 +286,6 @@ def serve_actuators(
     _print(summary, ("control steps [count]", "wall time [s]", "resends [count]",
                      "round-trip time median [s]", "round-trip time p99 [s]"))
     if interrupted:
-        console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
+        stderr_console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
         raise typer.Exit(130)
 
