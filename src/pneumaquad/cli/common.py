@@ -81,10 +81,10 @@ AllowRemoteOption = Annotated[
 ]
 
 
-def check_bind(host: str, allow_remote: bool, option: str) -> None:
+def check_bind(host: str, allow_remote: bool, option: str, warn: bool = True) -> None:
     """Refuse a non-loopback bind address without ``--allow-remote``; with it, print a
-    warning naming the address. Loopback: ``localhost`` and the 127.0.0.0/8 and ::1
-    addresses."""
+    warning naming the address (unless ``warn`` is False: the caller warns once bound).
+    Loopback: ``localhost`` and the 127.0.0.0/8 and ::1 addresses."""
     import ipaddress
 
     try:
@@ -98,8 +98,9 @@ def check_bind(host: str, allow_remote: bool, option: str) -> None:
             f"{host!r} is not a loopback address: the service has no authentication, so "
             "anyone who reaches it controls the simulation; pass --allow-remote to bind it "
             "anyway (or use 127.0.0.1 behind an authenticating proxy)", param_hint=option)
-    stderr_console.print(f"[yellow]warning: listening on {host}, reachable from the network, "
-                  "without authentication[/yellow]", highlight=False)
+    if warn:
+        stderr_console.print(f"[yellow]warning: listening on {host}, reachable from the network, "
+                             "without authentication[/yellow]", highlight=False)
 
 
 OverwriteOption = Annotated[

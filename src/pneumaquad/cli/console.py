@@ -60,7 +60,7 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
         console.print(f"Input devices: UDP {server.host}:{server.port}")
     if app.host not in ("127.0.0.1", "::1", "localhost"):
         stderr_console.print(f"[yellow]warning:[/] bound to {app.host}: anyone who can reach this "
-                      "port can drive the simulation (no authentication)")
+                             "port can drive the simulation (no authentication)")
     if replay is not None:
         if app.open_run(replay):
             console.print(f"Replaying {replay}")
@@ -119,6 +119,6 @@ def console_command(
     allow_remote: AllowRemoteOption = False,
 ) -> None:
     """Operator console in the browser: live 3-D robot, run controls, teleoperation."""
-    check_bind(host, allow_remote, "--host")
+    check_bind(host, allow_remote, "--host", warn=False)  # warned once bound, below
     serve_console(params, configuration, environment, host, port, duration, overrides, start,
                   replay, device_port)

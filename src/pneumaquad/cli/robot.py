@@ -237,7 +237,7 @@ def _print_checks(summary: dict[str, Any]) -> None:
     stopped = summary.get("stopped before")
     if stopped is not None:
         stderr_console.print(f"[yellow]stopped before {stopped['phase']}: {stopped['reason']}"
-                      "[/yellow]", highlight=False)
+                             "[/yellow]", highlight=False)
 
 
 def _check_environment(environment: str) -> None:
