@@ -210,7 +210,7 @@ def test_ctrl_c_in_the_run_keeps_the_folder_and_renders_the_part_that_ran(
 ) -> None:
     out = tmp_path / "long"
     returncode, stderr = interrupt_when_recording(
-        ["robot", "stand", "--hold", "3000", "--video-fps", "2", "-o", str(out)],
+        ["robot", "stand", "--hold", "3000", "--video", "--video-fps", "2", "-o", str(out)],
         out / "recording.csv", 200_000, 120.0, cwd=tmp_path,
     )
     assert returncode == 130, stderr

@@ -78,8 +78,9 @@ def _check_video_quality(quality: str) -> str:
 #: Default video frame rate [frames/s].
 VIDEO_FPS = 30.0
 VideoOption = Annotated[
-    bool, typer.Option("--video/--no-video", help="Render video.mp4, a GIF and first-frame.png "
-                       "(in a separate process, beside the run and the plots).")
+    bool, typer.Option("--video/--no-video", help="Render video.mp4 and a GIF (in a separate "
+                       "process, beside the run and the plots; a walk takes about 2.5x as "
+                       "long with it). first-frame.png is drawn either way.")
 ]
 VideoFpsOption = Annotated[
     float, typer.Option("--video-fps", help="Video frame rate, 1 to 240 frames/s.",
@@ -383,7 +384,7 @@ def robot_stand(
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
     output: OutputOption = None,
-    video: VideoOption = True,
+    video: VideoOption = False,
     video_fps: VideoFpsOption = VIDEO_FPS,
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
     profile: ProfileOption = False,
@@ -427,7 +428,7 @@ def robot_walk(
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
     output: OutputOption = None,
-    video: VideoOption = True,
+    video: VideoOption = False,
     video_fps: VideoFpsOption = VIDEO_FPS,
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
     profile: ProfileOption = False,
