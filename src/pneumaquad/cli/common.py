@@ -35,6 +35,7 @@ __all__ = [
     "check_bind",
     "check_step_count",
     "command_clock",
+    "command_group",
     "console",
     "finish_run",
     "option_range",
@@ -56,6 +57,13 @@ MAX_CONTROL_STEPS = 10_000_000
 SIMULATED_DURATION = Bounds(0.0, MAX_SIMULATED_TIME, "s")
 #: Range of a wall-clock duration option: (0, 86400 s].
 WALL_DURATION = Bounds(0.0, MAX_WALL_TIME, "s")
+
+def command_group(**options: Any) -> typer.Typer:
+    """A command group (``typer.Typer``) of the pneumaquad command line: help texts are
+    plain text, so that bracketed units (``[s]``, ``[m/s]``) show as written instead of
+    being read as Rich markup."""
+    return typer.Typer(rich_markup_mode=None, **options)
+
 
 #: Results (figures, summaries, where files were written): standard output, so that
 #: ``> file`` keeps them.

@@ -24,7 +24,7 @@ from rich.table import Table
 
 from pneumaquad.analysis import find_steps
 from pneumaquad.analysis.fits import FitResult, check_standard_errors, format_r_squared
-from pneumaquad.cli.common import ParamsOption, SetOption, console, stderr_console
+from pneumaquad.cli.common import ParamsOption, SetOption, command_group, console, stderr_console
 from pneumaquad.identification.equivalent_area import AREA_MODES, START_TEMPERATURE_SOURCES
 from pneumaquad.identification.friction import (
     FrictionPoints,
@@ -55,7 +55,7 @@ COMMAND_THRESHOLD = 0.05
 #: Exit status of a fit that ran but failed its own checks (nothing written).
 FIT_FAILED_STATUS = 1
 
-fit_app = typer.Typer(
+fit_app = command_group(
     help="Identify friction and valve parameters from recordings (thesis 4.2.2-4.2.3).",
     no_args_is_help=True,
     pretty_exceptions_enable=False,

@@ -23,6 +23,7 @@ from pneumaquad.cli.common import (
     SetOption,
     check_step_count,
     command_clock,
+    command_group,
     console,
     finish_run,
     option_range,
@@ -56,14 +57,14 @@ def user_errors() -> tuple[type[Exception], ...]:
     return (ParameterError, RecordedReferenceError, ReferenceSolverError, RigDivergedError,
             VideoError, SimulationDivergedError)
 
-app = typer.Typer(
+app = command_group(
     help="pneumaquad: simulator for pneumatically actuated legged robots.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=False,
 )
-params_app = typer.Typer(help="List, show and check parameter sets.", no_args_is_help=True)
-rig_app = typer.Typer(
+params_app = command_group(help="List, show and check parameter sets.", no_args_is_help=True)
+rig_app = command_group(
     help="Single-DoF test rig (thesis ch. 4): one cylinder moving a load.", no_args_is_help=True
 )
 app.add_typer(params_app, name="params")

@@ -25,6 +25,7 @@ from pneumaquad.cli.common import (
     ProfileOption,
     SetOption,
     command_clock,
+    command_group,
     console,
     finish_run,
     option_range,
@@ -46,12 +47,12 @@ from pneumaquad.robot.video import (
 )
 from pneumaquad.robot.video_worker import VideoSettings, VideoWorker, VideoWorkerError
 
-leg_app = typer.Typer(
+leg_app = command_group(
     help="The front-right leg on a fixed thorax (thesis 5.5.2 validation set-up).",
     no_args_is_help=True,
 )
-robot_app = typer.Typer(help="The whole quadruped on its 12 pneumatic joints.",
-                        no_args_is_help=True)
+robot_app = command_group(help="The whole quadruped on its 12 pneumatic joints.",
+                          no_args_is_help=True)
 
 RobotParamsOption = Annotated[
     str, typer.Option("--params", "-p", help="Robot parameter set name or TOML path.")

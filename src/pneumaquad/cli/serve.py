@@ -25,6 +25,7 @@ from pneumaquad.cli.common import (
     SetOption,
     check_bind,
     check_step_count,
+    command_group,
     console,
     option_range,
     refuse_occupied_output,
@@ -33,8 +34,8 @@ from pneumaquad.cli.common import (
 from pneumaquad.params import ParameterError
 from pneumaquad.params.schema import Bounds
 
-serve_app = typer.Typer(help="Networked co-simulation over UDP (thesis ch. 5.1-5.3).",
-                        no_args_is_help=True)
+serve_app = command_group(help="Networked co-simulation over UDP (thesis ch. 5.1-5.3).",
+                          no_args_is_help=True)
 
 ParamsOption = Annotated[
     str, typer.Option("--params", "-p", help="Robot parameter set name or TOML path.")

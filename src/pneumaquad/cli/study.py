@@ -7,12 +7,12 @@ from typing import Annotated
 
 import typer
 
-from pneumaquad.cli.common import console
+from pneumaquad.cli.common import command_group, console
 from pneumaquad.params import ParameterError, Problem
 
-study_app = typer.Typer(help="Studies: many runs with varied parameters (sweeps, Monte "
-                        "Carlo, sensitivity), on all cores or a Ray cluster.",
-                        no_args_is_help=True)
+study_app = command_group(help="Studies: many runs with varied parameters (sweeps, Monte "
+                          "Carlo, sensitivity), on all cores or a Ray cluster.",
+                          no_args_is_help=True)
 
 
 @study_app.command("run")

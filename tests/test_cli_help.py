@@ -1,0 +1,44 @@
+"""Every command's help keeps its bracketed units (``[s]``, ``[m/s]``): help texts are plain
+text, not Rich markup, which would swallow them."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from pneumaquad.cli.main import app
+
+GROUP = typer.main.get_command(app)
+
+
+def _commands(group, path: tuple[str, ...] = ()):
+    for name, command in group.commands.items():
+        if hasattr(command, "commands"):  # a group (typer's own click)
+            yield from _commands(command, (*path, name))
+        else:
+            yield (*path, name), command
+
+
+COMMANDS = list(_commands(GROUP))
+
+
+def test_every_command_is_found():
+    names = {" ".join(path) for path, _ in COMMANDS}
+    assert {"rig step", "robot walk", "robot stand", "params show", "serve dynamics"} <= names
+
+
+@pytest.mark.parametrize(("path", "command"), COMMANDS,
+                         ids=[" ".join(path) for path, _ in COMMANDS])
+def test_bracketed_units_survive_in_the_help(path, command):
+    bracketed = [(param.name, found) for param in command.params
+                 for found in re.findall(r"\[[^\]]+\]", getattr(param, "help", None) or "")]
+    bracketed += [("<command>", found)
+                  for found in re.findall(r"\[[^\]]+\]", command.help or "")]
+    shown = CliRunner().invoke(app, [*path, "--help"], terminal_width=200)
+    assert shown.exit_code == 0, shown.output
+    text = " ".join(shown.output.split())
+    for name, unit in bracketed:
+        assert unit in text, f"{' '.join(path)} {name}: {unit} lost from the help"
