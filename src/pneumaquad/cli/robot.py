@@ -549,14 +549,14 @@ def _print_supply_requirements(params: str, overrides: list[str] | None) -> None
     """The least supply pressure to stand up, stand and walk, from statics."""
     from pneumaquad.locomotion.capacity import (
         FOUR_LEGGED_RISE_MARGIN,
+        four_legged_rise_path,
         gauge_text,
         stall_forces,
         supply_requirements,
     )
     from pneumaquad.robot.builder import build_robot
-    from pneumaquad.robot.scenarios import LYING_ANGLES, STANDING_ANGLES, TUCKED_ANGLES
+    from pneumaquad.robot.scenarios import STANDING_ANGLES
     from pneumaquad.robot.simulation import RobotSimulation
-    from pneumaquad.robot.stand_up import stand_up_path
 
     robot = build_robot(load_robot(params, overrides or []), "quadruped")
     simulation = RobotSimulation(robot)
@@ -569,8 +569,7 @@ def _print_supply_requirements(params: str, overrides: list[str] | None) -> None
         console.print(f"  {name} cylinder at this supply: {extending:.0f} N extending, "
                       f"{retracting:.0f} N retracting (Coulomb friction deducted)",
                       highlight=False)
-    path = stand_up_path(np.linspace(0.0, 1.0, 41), STANDING_ANGLES, LYING_ANGLES,
-                         TUCKED_ANGLES)
+    path = four_legged_rise_path(STANDING_ANGLES)
     for requirement in supply_requirements(simulation, STANDING_ANGLES, path):
         where = ", ".join(f"{math.degrees(a):.0f}°" for a in requirement.angles)
         console.print(

@@ -39,6 +39,7 @@ from pneumaquad.robot.simulation import RobotSimulation
 from pneumaquad.robot.stand_up import stand_up_path
 
 from .stance_kernels import (
+    StanceViews,
     centre_of_mass_into,
     cylinder_forces_into,
     normal_forces_into,
@@ -47,9 +48,9 @@ from .stance_kernels import (
 )
 
 __all__ = ["FOUR_LEGGED_RISE_MARGIN", "SITUATIONS", "InsufficientSupplyError",
-           "SupplyRequirement",
-           "check_supply", "cylinder_demands", "least_supply_for_force", "rise_in_pairs",
-           "rise_requirement", "stall_forces", "supply_requirements"]
+           "SupplyRequirement", "check_supply", "cylinder_demands", "four_legged_rise_path",
+           "gauge_text", "least_supply_for_force", "rise_in_pairs", "rise_requirement",
+           "stall_forces", "supply_requirements"]
 
 Array = NDArray[np.float64]
 
@@ -90,8 +91,8 @@ def least_supply_for_force(actuator: ActuatorParameters, force: float) -> float:
             - atmosphere * cylinder.rod_cross_section) / cylinder.rod_area
 
 
-def cylinder_demands(simulation: RobotSimulation, angles: Array,
-                     carried: Array) -> Array:
+def cylinder_demands(simulation: RobotSimulation, angles: Array, carried: Array,
+                     views: StanceViews | None = None) -> Array:
     """Cylinder forces [N] (positive extending) that hold the robot still at ``angles``.
 
     The thorax is level at the height that puts the feet of ``angles`` on flat ground;
@@ -107,6 +108,9 @@ def cylinder_demands(simulation: RobotSimulation, angles: Array,
     angles : (3,) ndarray
         (alpha, beta, gamma) [rad] of every leg.
     carried : (legs,) ndarray of bool
+    views : StanceViews, optional
+        The simulation's :func:`.stance_kernels.stance_views` (made here if not given;
+        they stay valid across poses, so a caller weighing many poses makes them once).
 
     Returns
     -------
@@ -115,7 +119,8 @@ def cylinder_demands(simulation: RobotSimulation, angles: Array,
     legs = len(simulation.robot.legs)
     height = standing_height(simulation, angles)
     simulation.set_pose(np.tile(angles, legs), thorax_position=np.array([0.0, 0.0, height]))
-    views, workspace = stance_views(simulation), stance_workspace()
+    views = stance_views(simulation) if views is None else views
+    workspace = stance_workspace()
     weights = np.asarray(carried, dtype=float)
     normal = np.zeros(legs)
     if weights.sum() == 3.0:  # the centre of mass at the centroid of the support
@@ -184,6 +189,7 @@ def supply_requirements(simulation: RobotSimulation, standing_angles: Array,
     robot = simulation.robot
     legs = len(robot.legs)
     saved = simulation.snapshot()
+    views = stance_views(simulation)
     try:
         four = np.ones(legs, dtype=bool)
         poses = {
@@ -198,7 +204,7 @@ def supply_requirements(simulation: RobotSimulation, standing_angles: Array,
                 continue
             best = None
             for angles, carried in cases:
-                demands = cylinder_demands(simulation, angles, carried)
+                demands = cylinder_demands(simulation, angles, carried, views)
                 for joint, force in enumerate(demands):
                     kind = robot.joint_types[joint]
                     pressure = least_supply_for_force(robot.actuators[kind], float(force))
@@ -226,13 +232,18 @@ class InsufficientSupplyError(ValueError):
     """The supply pressure is below what statics asks to stand or walk."""
 
 
-def rise_requirement(simulation: RobotSimulation, standing_angles: Array,
-                     samples: int = 21) -> SupplyRequirement:
-    """:func:`supply_requirements`' "standing up" of the four-legged rise into
-    ``standing_angles`` (3,) [rad] (:func:`pneumaquad.robot.stand_up.stand_up_path`,
-    ``samples`` poses; the largest demand is near the lying pose)."""
-    path = stand_up_path(np.linspace(0.0, 1.0, samples), standing_angles, LYING_ANGLES,
+def four_legged_rise_path(standing_angles: Array, samples: int = 21) -> Array:
+    """Leg poses (samples, 3) [rad] of the four-legged rise from lying into
+    ``standing_angles`` (:func:`pneumaquad.robot.stand_up.stand_up_path`; the largest
+    demand is near the lying pose, its first sample)."""
+    return stand_up_path(np.linspace(0.0, 1.0, samples), standing_angles, LYING_ANGLES,
                          TUCKED_ANGLES)
+
+
+def rise_requirement(simulation: RobotSimulation, standing_angles: Array) -> SupplyRequirement:
+    """:func:`supply_requirements`' "standing up" of the four-legged rise into
+    ``standing_angles`` (3,) [rad] (:func:`four_legged_rise_path`)."""
+    path = four_legged_rise_path(standing_angles)
     return supply_requirements(simulation, standing_angles, path, ("standing up",))[0]
 
 

@@ -21,7 +21,7 @@ from .experiment import Phase
 from .frames import euler_zyx_matrix
 from .legs import leg_dh_table, solve_leg, thorax_frame_points
 from .simulation import RobotSimulation
-from .stance_check import StanceCheck
+from .stance_check import StanceCheck, standing_height
 from .stand_up import STAGED_RISE_TIME, staged_rise_phases, stand_up_path
 
 __all__ = [
@@ -223,16 +223,6 @@ def resting_height(simulation: RobotSimulation, angles: np.ndarray) -> float:
             low = centre - radius
         lowest = min(lowest, low)
     return probe - lowest
-
-
-def standing_height(simulation: RobotSimulation, angles: np.ndarray) -> float:
-    """Thorax height [m] that puts the feet of a leg pose on flat ground."""
-    robot = simulation.robot
-    rotation = euler_zyx_matrix(robot.parameters.placement.rotation_zyx)
-    depths = [
-        (rotation @ thorax_frame_points(leg_dh_table(robot, leg), angles))[2] for leg in robot.legs
-    ]
-    return -float(np.mean(depths))
 
 
 def stand_up_phases(simulation: RobotSimulation, rise_time: float | None = None,

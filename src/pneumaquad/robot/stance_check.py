@@ -27,7 +27,7 @@ from .legs import leg_dh_table, thorax_frame_points
 from .recording import thorax_attitude
 from .simulation import RobotSimulation
 
-__all__ = ["StanceCheck", "StanceLimits", "stance_verdict"]
+__all__ = ["StanceCheck", "StanceLimits", "stance_verdict", "standing_height"]
 
 
 @dataclass(frozen=True)
@@ -76,7 +76,7 @@ def stance_verdict(simulation: RobotSimulation, angles: np.ndarray,
     angles = np.asarray(angles, dtype=float)
     per_joint = angles if angles.size == robot.joint_count else np.tile(angles,
                                                                           len(robot.legs))
-    target = _target_height(simulation, per_joint)
+    target = standing_height(simulation, per_joint)
     height = float(simulation.data.qpos[2])
     errors = np.abs(simulation.joint_angles() - per_joint)
     worst = int(np.argmax(errors))
@@ -107,14 +107,18 @@ def stance_verdict(simulation: RobotSimulation, angles: np.ndarray,
     }
 
 
-def _target_height(simulation: RobotSimulation, per_joint: np.ndarray) -> float:
-    """Thorax height [m], level at its nominal placement, that puts the feet of the pose
-    ``per_joint`` [rad] on flat ground on average over the legs."""
+def standing_height(simulation: RobotSimulation, angles: np.ndarray) -> float:
+    """Thorax height [m], level at its nominal placement, that puts the feet of a pose on
+    flat ground (on average over the legs): ``angles`` [rad] one (alpha, beta, gamma) for
+    every leg, or one angle per joint."""
     robot = simulation.robot
+    legs = robot.legs
+    angles = np.asarray(angles, dtype=float)
+    per_leg = angles.reshape(len(legs), 3) if angles.size == robot.joint_count else [
+        angles] * len(legs)
     rotation = euler_zyx_matrix(robot.parameters.placement.rotation_zyx)
-    depths = [(rotation @ thorax_frame_points(leg_dh_table(robot, leg),
-                                              per_joint[3 * k: 3 * k + 3]))[2]
-              for k, leg in enumerate(robot.legs)]
+    depths = [(rotation @ thorax_frame_points(leg_dh_table(robot, leg), pose))[2]
+              for leg, pose in zip(legs, per_leg, strict=True)]
     return -float(np.mean(depths))
 
 
