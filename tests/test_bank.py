@@ -242,3 +242,20 @@ def test_rig_bank_equals_the_arrays_the_rig_built() -> None:
 def test_a_bank_needs_a_controller_per_actuator(robot) -> None:
     with pytest.raises(ValueError, match="one controller per actuator"):
         ActuatorBank([robot.actuators["alpha"]] * 2, [robot.parameters.controller.alpha])
+
+
+@pytest.mark.parametrize("supply", ["ideal", "tank"])
+def test_the_air_count_restarts_only_for_a_regulated_supply(robot, supply) -> None:
+    simulation = RobotSimulation(robot, supply=supply)
+    simulation.set_pose(np.zeros(robot.joint_count))
+    simulation.command_angles(np.full(robot.joint_count, 0.2))
+    simulation.step(200)
+    drawn = simulation.air_consumed()
+    assert drawn > 0.0
+    simulation.restart_clock()
+    assert simulation.time == 0.0 and simulation.steps_taken == 0
+    if supply == "ideal":
+        assert simulation.air_consumed() == 0.0
+        assert np.all(simulation.air_consumed_per_joint() == 0.0)
+    else:  # the tank's pressure has dropped by what was drawn: the count stays
+        assert simulation.air_consumed() == drawn

@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 import viser
 
-from pneumaquad.core.layout import SUPPLY_TANK
 from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
@@ -68,14 +67,7 @@ def initial_pose(simulation: RobotSimulation) -> np.ndarray:
     simulation.command_angles(angles)
     if robot.free:
         simulation.step(round(SETTLE_TIME / simulation.control_step))
-        # the console's clock and air counter start with the robot standing (a tank keeps
-        # its count: its pressure has dropped by the air drawn)
-        simulation.data.time = 0.0
-        simulation.steps_taken = 0
-        bank = simulation.bank
-        if np.all(bank.supply["model"] != SUPPLY_TANK):
-            bank.state["air_consumed"] = 0.0
-            bank.supply["drawn_mass"] = 0.0
+        simulation.restart_clock()  # the console's clock starts with the robot standing
     return angles
 
 

@@ -380,6 +380,16 @@ class ActuatorBank:
         self.pid_state[:] = 0.0
         self.outputs[:] = 0.0
 
+    def restart_air_count(self) -> bool:
+        """Start counting the air drawn again from 0 (per actuator and from the supply),
+        the state otherwise as it is; not for a tank supply, whose pressure has dropped by
+        the air counted (returns False then, True when restarted)."""
+        if np.any(self.supply["model"] == SUPPLY_TANK):
+            return False
+        self.state["air_consumed"] = 0.0
+        self.supply["drawn_mass"] = 0.0
+        return True
+
     # --- readouts --------------------------------------------------------------------
     def chamber_pressures(self) -> np.ndarray:
         """(N, 2) cap and rod pressures [Pa], absolute."""

@@ -286,6 +286,14 @@ class RobotSimulation:
                 set_seal_friction(self.mujoco, self.seal, index)
         self.step(0)  # piston readouts and forces of the new pose (compiles on first use)
 
+    def restart_clock(self) -> None:
+        """Start the simulated time (and the count of steps taken) again from 0 where the
+        robot stands now; a regulated supply's air count too
+        (:meth:`~pneumaquad.core.bank.ActuatorBank.restart_air_count`)."""
+        self.data.time = 0.0
+        self.steps_taken = 0
+        self.bank.restart_air_count()
+
     # --- commands (the joints' own, :class:`~pneumaquad.robot.joints.CylinderJoints`) --
     def command_angles(self, angles: np.ndarray, joints: np.ndarray | None = None) -> None:
         """Closed-loop position control of ``joints`` (all by default) to ``angles`` [rad]."""
