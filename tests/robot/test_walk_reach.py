@@ -92,13 +92,16 @@ def test_the_walk_is_the_whole_number_of_cycles_nearest_to_the_distance(distance
 
 
 def test_a_heading_out_of_reach_walks_a_shorter_cycle_at_the_same_speed(robot):
-    from pneumaquad.locomotion.walking import reachable_settings
+    from pneumaquad.locomotion.walking import reachable_plan
 
     straight = WalkSettings(distance=0.5)
-    assert reachable_settings(robot, straight) == straight  # reachable as asked
+    walked, posture = reachable_plan(robot, straight)
+    assert walked == straight  # reachable as asked, about the default posture
+    np.testing.assert_array_equal(posture, WALKING_ANGLES)
     asked = WalkSettings(distance=0.5, heading=math.radians(240.0))  # 14 mm out at 8 s
-    walked = reachable_settings(robot, asked)
+    walked, posture = reachable_plan(robot, asked)
     assert walked.period == pytest.approx(0.875 * asked.period)
     assert walked.speed == asked.speed and walked.heading == asked.heading
+    assert posture is not None
     unreachable = WalkSettings(step_height=0.3)  # no cycle makes a 30 cm lift reachable
-    assert reachable_settings(robot, unreachable) == unreachable
+    assert reachable_plan(robot, unreachable) == (unreachable, None)

@@ -39,7 +39,7 @@ from .walk_settings import (
 )
 from .walking import (
     leg_posture,
-    reachable_settings,
+    reachable_plan,
     tip_over_series,
     walking_outcome,
     walking_phases,
@@ -89,8 +89,8 @@ def plan_walking(simulation: RobotSimulation,
                  settings: WalkSettings) -> tuple[list[Phase], WalkPlan, WalkSettings]:
     """:func:`.walking.walking_phases` after :func:`check_walk_settings`, with the cycle
     shortened where the legs cannot reach the plan of the one asked
-    (:func:`.walking.reachable_settings`); returns the phases, the plan and the settings
-    walked.
+    (:func:`.walking.reachable_plan`, whose posture it walks about); returns the phases,
+    the plan and the settings walked.
 
     Raises
     ------
@@ -101,8 +101,8 @@ def plan_walking(simulation: RobotSimulation,
     """
     check_walk_settings(settings)
     try:
-        settings = reachable_settings(simulation.robot, settings)
-        return (*walking_phases(simulation, settings), settings)
+        settings, posture = reachable_plan(simulation.robot, settings)
+        return (*walking_phases(simulation, settings, posture), settings)
     except UnreachablePlanError as error:
         raise WalkSettingsError(
             f"the legs cannot walk heading {math.degrees(settings.heading):g}° at "

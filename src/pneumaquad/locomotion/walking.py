@@ -41,7 +41,7 @@ __all__ = [
     "WalkSettings",
     "contact_slide",
     "gait_support_margins",
-    "reachable_settings",
+    "reachable_plan",
     "tip_over_series",
     "walking_gait",
     "walking_outcome",
@@ -65,17 +65,19 @@ def walking_gait(robot: RobotModel, settings: WalkSettings, angles: np.ndarray) 
                       yaw_rate=settings.body_yaw_rate())
 
 
-#: Cycle periods, as fractions of the one asked, that :func:`reachable_settings` tries in
+#: Cycle periods, as fractions of the one asked, that :func:`reachable_plan` tries in
 #: turn: a shorter cycle at the same speed is a shorter stride and swing (headings 60° and
 #: 240° are out of reach by 14 mm with the default 8 s cycle, within reach with 7 s).
 PERIOD_SCALES = (1.0, 0.875, 0.75)
 
 
-def reachable_settings(robot: RobotModel, settings: WalkSettings) -> WalkSettings:
+def reachable_plan(robot: RobotModel,
+                   settings: WalkSettings) -> tuple[WalkSettings, np.ndarray | None]:
     """``settings``, or with the first shorter cycle of :data:`PERIOD_SCALES` whose plan
     the legs reach (within :data:`.reach.REACH_TOLERANCE`, about the posture
-    :func:`.reach.choose_posture` picks), at the same speed; unchanged when none does
-    (the plan is then refused, :func:`.reach.check_reach`)."""
+    :func:`.reach.choose_posture` picks), at the same speed, and that posture [rad];
+    ``settings`` unchanged and None when none does (the plan is then refused,
+    :func:`.reach.check_reach`)."""
     for scale in PERIOD_SCALES:
         candidate = replace(settings, period=settings.period * scale)
 
@@ -87,10 +89,10 @@ def reachable_settings(robot: RobotModel, settings: WalkSettings) -> WalkSetting
             # the default posture is chosen only when its plan is within reach
             if (np.array_equal(posture, WALKING_ANGLES)
                     or plan_miss(robot, gait_for(posture)) <= REACH_TOLERANCE):
-                return candidate
+                return candidate, posture
         except ValueError:  # the gait refuses these settings (e.g. its margin)
             continue
-    return settings
+    return settings, None
 
 
 #: The phase of a staged walk start that moves the legs from their mean pose into the
@@ -104,9 +106,12 @@ def leg_posture(pose: np.ndarray) -> np.ndarray:
 
 
 def walking_phases(
-    simulation: RobotSimulation, settings: WalkSettings
+    simulation: RobotSimulation, settings: WalkSettings, posture: np.ndarray | None = None
 ) -> tuple[list[Phase], WalkPlan]:
     """Stand up into the gait's first pose, walk, stop; returns the phases and the plan.
+
+    ``posture`` [rad]: the walking posture when the caller has chosen it already
+    (:func:`reachable_plan`); by default :func:`.reach.choose_posture`'s.
 
     The robot stands up into the first pose, a pair of legs at a time where the supply is
     short of what the four-legged rise needs (:func:`.capacity.rise_in_pairs`); where the
@@ -132,7 +137,8 @@ def walking_phases(
     def gait_for(angles: np.ndarray) -> CrawlGait:
         return walking_gait(robot, settings, angles)
 
-    posture = choose_posture(robot, gait_for, WALKING_ANGLES)
+    if posture is None:
+        posture = choose_posture(robot, gait_for, WALKING_ANGLES)
     gait = gait_for(posture)
     duration = settings.duration()
     plan = plan_walk(robot, gait, duration)
