@@ -148,7 +148,7 @@ def _read_layered(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
         raise ParameterError([Problem(EXTENDS_KEY, base, "is not a shipped parameter set "
                                       f"(one of: {', '.join(list_parameter_sets())}) nor a "
                                       ".toml path")], source=str(path)) from None
-    if not base_path.is_absolute() and base_path.parent != DATA_DIR:
+    if not base_path.is_absolute():  # a path beside the file (a shipped name is absolute)
         base_path = path.parent / base_path
     resolved = base_path.resolve()
     if resolved in chain or resolved == path.resolve():
