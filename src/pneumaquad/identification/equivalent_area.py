@@ -33,7 +33,7 @@ from pneumaquad.core.physics.valve import centered_voltage
 from pneumaquad.core.valve_fit import evaluate_equivalent_area
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.rig.model import rig_bank
-from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk
+from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, open_loop_delays, run_rig_chunk
 
 from .preprocess import REQUIRED_COLUMNS, IdentificationError, select_step
 
@@ -242,6 +242,7 @@ def _simulate_from(
         grid.step,
         grid.substeps,
         records,
+        *open_loop_delays(1),
     )
     rows = rows[0]
     return rows

@@ -26,6 +26,7 @@ __all__ = [
     "FrictionParameters",
     "GasParameters",
     "Meta",
+    "RigControllerParameters",
     "RigParameters",
     "RigSetup",
     "SimpleValveParameters",
@@ -572,6 +573,18 @@ class ControllerParameters(_Model):
     integral_limit: Annotated[Voltage, _non_negative(MAX_VOLTAGE, "V")]
 
 
+#: Longest measurement delay of the rig's controller [s].
+MAX_MEASUREMENT_DELAY = 0.1
+
+
+class RigControllerParameters(ControllerParameters):
+    """The rig's PID controller and the delay of its position measurement [s] (the
+    robot's joint controllers have none): the PID sees the piston position of
+    round(measurement_delay / control_step) control steps earlier."""
+
+    measurement_delay: Annotated[Time, _non_negative(MAX_MEASUREMENT_DELAY, "s")] = 0.0
+
+
 class SimulationParameters(_Model):
     """Integration settings: control step [s], substeps, integrator, tolerances."""
 
@@ -587,7 +600,7 @@ class RigSetup(_Model):
 
     actuator: ActuatorParameters
     rig: RigParameters
-    controller: ControllerParameters
+    controller: RigControllerParameters
     simulation: SimulationParameters
 
     @_model_validator(mode="after")

@@ -34,7 +34,7 @@ from pneumaquad.params import RigSetup, load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH
 from pneumaquad.rig.model import rig_bank
 from pneumaquad.rig.signals import sine
-from pneumaquad.rig.simulate import RIG_COLUMNS, new_rows, run_rig_chunk
+from pneumaquad.rig.simulate import RIG_COLUMNS, delay_steps, new_rows, run_rig_chunk
 
 __all__ = [
     "THESIS_TABLE_3",
@@ -151,9 +151,12 @@ def time_rig_run(
     records, rows = new_rows(signal.shape[0], 1)
     signals = np.ascontiguousarray(signal, dtype=float).reshape(1, -1)
     sim = setup.simulation
+    delays = np.array([delay_steps(setup)], dtype=np.int64)
+    start_positions = bank.state["position"].copy()
     start = time.perf_counter()
     run_rig_chunk(bank.actuator_arrays, bank.controller_arrays, closed_loop, signals, 0,
-                  signal.shape[0], sim.control_step, sim.substeps, records)
+                  signal.shape[0], sim.control_step, sim.substeps, records, delays,
+                  start_positions)
     return time.perf_counter() - start, rows[0]
 
 

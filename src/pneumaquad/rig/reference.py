@@ -241,6 +241,8 @@ def simulate_rig_reference(
 
     Each control interval is integrated separately with the command held, from the same
     sampled state as the fixed-step loop, so the two differ only by integration error.
+    A controller's ``measurement_delay`` is honoured as in the fixed-step loop (the PID
+    sees the position of that many control steps earlier, the start position before).
     The right-hand side is :func:`pneumaquad.core.kernel.rig_rates`, built from the same
     physics functions as the compiled kernels. (The set-valued Coulomb models have no
     ODE form; parameter validation refuses them with an adaptive integrator.) The solver
@@ -266,6 +268,8 @@ def simulate_rig_reference(
     scales = state_scales[active]
     total = int(signal.shape[0])
     records, rows = new_rows(total)
+    delay = round(setup.controller.measurement_delay / dt)  # control steps
+    start_position = float(record["position"])
     done = 0
     flushed = 0
     interrupted = False
@@ -278,7 +282,11 @@ def simulate_rig_reference(
                     break
                 if closed_loop:
                     reference = float(signal[k])
-                    command = pid_update(gains, controller, reference, record["position"], dt)
+                    measured = record["position"]
+                    if delay > 0:  # the position at t_{k-delay}, as the fixed-step loop
+                        measured = (records[k - delay - 1]["position"] if k > delay
+                                    else start_position)
+                    command = pid_update(gains, controller, reference, measured, dt)
                 else:
                     reference = math.nan
                     command = float(signal[k])

@@ -61,8 +61,10 @@ __all__ = [  # the recording's names are re-exported for the callers of this mod
     "ReferenceSolverError",
     "RigDivergedError",
     "RigResult",
+    "delay_steps",
     "first_non_finite",
     "new_rows",
+    "open_loop_delays",
     "run_rig_chunk",
     "simulate_rig",
     "simulate_rig_reference",
@@ -74,9 +76,14 @@ __all__ = [  # the recording's names are re-exported for the callers of this mod
 @compiled(nogil=True)
 def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
                   closed_loop: bool, signals: np.ndarray, start: int, count: int,
-                  control_step: float, substeps: int, records: np.ndarray) -> None:
+                  control_step: float, substeps: int, records: np.ndarray,
+                  delays: np.ndarray, start_positions: np.ndarray) -> None:
     """Run ``count`` control steps of N rigs from step ``start``; fill
     ``records[:, start:start + count]``.
+
+    A rig with a measurement delay of d control steps gives its PID at step k the piston
+    position at t_{k-d}: row k - d - 1 of its recording, or its start position for
+    k ≤ d (at rest before the run). With d = 0 the PID reads the state itself.
 
     Parameters
     ----------
@@ -95,7 +102,12 @@ def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
     substeps : int
         Heun substeps per control step.
     records : ndarray (N, >= start + count) of RIG_ROW_DTYPE
-        Row k of rig i is filled after step k (:func:`write_row`).
+        Row k of rig i is filled after step k (:func:`write_row`); rows before ``start``
+        hold the history a measurement delay reads.
+    delays : ndarray (N,) of int
+        Measurement delay of each rig's PID [control steps] (:func:`delay_steps`).
+    start_positions : ndarray (N,)
+        Piston position of each rig at t = 0 [m] (what a delayed PID sees first).
     """
     params, state, supply, outputs = actuators
     commands, references = controllers.commands, controllers.references
@@ -107,11 +119,15 @@ def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
         for i in range(rigs):
             if closed_loop:
                 references[i] = signals[i, k]
+                measured = state[i].position
+                if delays[i] > 0:
+                    row = k - delays[i] - 1
+                    measured = records[i, row].position if row >= 0 else start_positions[i]
                 if controllers.gain_scale[i] == 1.0:  # the same numbers, no scaled copy
                     commands[i] = pid_update(controllers.gains[i], controllers.pid_state[i],
-                                             references[i], state[i].position, control_step)
+                                             references[i], measured, control_step)
                 else:
-                    commands[i] = scaled_pid_update(controllers, i, state[i].position,
+                    commands[i] = scaled_pid_update(controllers, i, measured,
                                                     control_step, scaled)
             else:
                 commands[i] = signals[i, k]
@@ -125,6 +141,18 @@ def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
             reference = references[i] if closed_loop else math.nan
             write_row(records[i], k, (k + 1) * control_step, commands[i], reference,
                       params[i], state[i], outputs[i], supply[0 if shared else i])
+
+
+def delay_steps(setup: RigSetup) -> int:
+    """The rig controller's measurement delay in whole control steps:
+    ``round(controller.measurement_delay / simulation.control_step)``."""
+    return round(setup.controller.measurement_delay / setup.simulation.control_step)
+
+
+def open_loop_delays(rigs: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`run_rig_chunk`'s ``delays`` and ``start_positions`` for ``rigs`` rigs whose
+    PIDs are not used (open loop) or see the present state: zeros."""
+    return np.zeros(rigs, dtype=np.int64), np.zeros(rigs)
 
 
 def simulate_rig(
@@ -260,6 +288,8 @@ def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bo
     dt = setups[0].simulation.control_step
     substeps = setups[0].simulation.substeps
     skipped = [skipped_columns(setup, closed_loop) for setup in setups]
+    delays = np.array([delay_steps(setup) for setup in setups], dtype=np.int64)
+    start_positions = bank.state["position"].copy()
     done = 0
     interrupted = False
     started = time.perf_counter()
@@ -269,7 +299,8 @@ def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bo
                 count = min(chunk_steps, total - done)
                 begun = time.perf_counter()
                 run_rig_chunk(bank.actuator_arrays, bank.controller_arrays, closed_loop,
-                              signals, done, count, dt, substeps, records)
+                              signals, done, count, dt, substeps, records, delays,
+                              start_positions)
                 computed = time.perf_counter()
                 _record_chunk(rows, done, count, skipped, recorders, started, several)
                 if clock is not None:
