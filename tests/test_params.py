@@ -423,7 +423,8 @@ def test_ranges_hold_for_models_built_in_python() -> None:
 
 def test_every_field_states_its_range_in_its_description() -> None:
     properties = CylinderParameters.model_json_schema()["properties"]
-    assert properties["bore"]["description"] == "finite, greater than 0 m and at most 10 m"
+    assert properties["bore"]["description"] == (
+        "Piston diameter; finite, greater than 0 m and at most 10 m")
     gas = RigSetup.model_json_schema()["$defs"]["GasParameters"]["properties"]
     assert "at most 5/3" in gas["heat_capacity_ratio"]["description"]
 

@@ -37,6 +37,7 @@ from .schema import (
     StepCount,
     Time,
     _Model,
+    described,
 )
 
 __all__ = [
@@ -104,8 +105,12 @@ class Frame(_Model):
     ``rotation_zyx`` = (a, b, c) [rad] gives R = Rz(a)·Ry(b)·Rx(c); ``position`` [m].
     """
 
-    rotation_zyx: tuple[Angle, Angle, Angle]
-    position: tuple[Coordinate, Coordinate, Coordinate]
+    rotation_zyx: tuple[Angle, Angle, Angle] = described(
+        "Rotation as SrLib's `EulerZYX` angles (a, b, c): R = Rz(a)·Ry(b)·Rx(c).",
+        "App. C.2 listings (`EulerZYX(Vec3(a, b, c), ...)`)")
+    position: tuple[Coordinate, Coordinate, Coordinate] = described(
+        "Translation (x, y, z) after the rotation.",
+        "App. C.2 listings (`EulerZYX(..., Vec3(x, y, z))`)")
 
 
 class LinkParameters(_Model):
@@ -116,23 +121,58 @@ class LinkParameters(_Model):
     link frame axes [kg m^2]) override the density estimate (thesis 5.6.1, 6.6.2).
     """
 
-    diameter: PositiveLength
-    length: NonNegativeLength
-    density: Density
-    collision_length: NonNegativeLength | None = None
-    mass: Annotated[Mass, Bounds(0.0, MAX_MASS, "kg")] | None = None
-    inertia: tuple[Inertia, Inertia, Inertia] | None = None
-    color: tuple[ColourComponent, ColourComponent, ColourComponent] = (0.7, 0.7, 0.7)
+    diameter: PositiveLength = described(
+        "Capsule diameter (SrLib `SetDimension`).",
+        "App. C.2.1 (legs), C.2.2 l.24 (thorax)")
+    length: NonNegativeLength = described(
+        "Length of the capsule's cylindrical part along the link's z axis; the hemispherical "
+        "caps add `diameter/2` at each end.",
+        "App. C.2.1 (legs), C.2.2 l.24 (thorax)")
+    density: Density = described(
+        "Density for the mass and inertia estimate (SrLib `UpdateInertia`).",
+        "App. C.2.1 (legs), C.2.2 l.26 (thorax)")
+    collision_length: NonNegativeLength | None = described(
+        "Cylindrical length of the collision capsule when it differs from `length`.",
+        "App. C.2.2 l.28 (thorax)",
+        default=None)
+    mass: Annotated[Mass, Bounds(0.0, MAX_MASS, "kg")] | None = described(
+        "Mass in place of the density estimate.",
+        "not in thesis: better masses are thesis future work (5.6.1, 6.6.2); the thorax's is "
+        "chosen so that the robot can stand (docs/robot.md)",
+        default=None)
+    inertia: tuple[Inertia, Inertia, Inertia] | None = described(
+        "Principal moments of inertia about the link frame's axes, in place of the density "
+        "estimate.",
+        "not in thesis: better inertias are thesis future work (5.6.1, 6.6.2)",
+        default=None)
+    color: tuple[ColourComponent, ColourComponent, ColourComponent] = described(
+        "Display colour (red, green, blue).",
+        "App. C.2.1, C.2.2 (SrLib colours)",
+        default=(0.7, 0.7, 0.7))
 
 
 class JointParameters(_Model):
     """A revolute joint: its frame in the parent and in the child link, limits [rad]."""
 
-    parent_frame: Frame | None = None
-    child_frame: Frame
-    lower_limit: JointAngle
-    upper_limit: JointAngle
-    damping: Damping = 0.0
+    parent_frame: Frame | None = described(
+        "The joint's frame in the parent link; alpha's is the leg's mounting (`[mounts]`), the "
+        "others need one.",
+        "App. C.2.1 l.66, l.74",
+        default=None)
+    child_frame: Frame = described(
+        "The joint's frame in the child link; its z axis is the rotation axis.",
+        "App. C.2.1 l.54, l.67, l.75")
+    lower_limit: JointAngle = described(
+        "Lower joint limit.",
+        "App. C.2.1 l.52, l.63, l.71; eq 5.2.2, 5.2.4, 5.2.6")
+    upper_limit: JointAngle = described(
+        "Upper joint limit; above `lower_limit`, less than 180° from it.",
+        "App. C.2.1 l.52, l.63, l.71")
+    damping: Damping = described(
+        "Viscous damping of the hinge.",
+        "not in thesis: the joint damping term thesis 5.6.1 suggests (0 shipped: the cylinders' "
+        "friction acts instead)",
+        default=0.0)
 
     @_model_validator(mode="after")
     def _limits(self) -> JointParameters:
@@ -146,11 +186,21 @@ class JointParameters(_Model):
 class LegParameters(_Model):
     """Link frames of one leg (App. C.2.1): coxa (two capsules welded), femur, tibia."""
 
-    coxa_weld_parent_frame: Frame
-    coxa_weld_child_frame: Frame
-    alpha: JointParameters
-    beta: JointParameters
-    gamma: JointParameters
+    coxa_weld_parent_frame: Frame = described(
+        "Frame welding the coxa's second capsule to its first: in the first.",
+        "App. C.2.1 l.58")
+    coxa_weld_child_frame: Frame = described(
+        "The same weld, in the second capsule.",
+        "App. C.2.1 l.59")
+    alpha: JointParameters = described(
+        "Alpha joint: thorax to coxa.",
+        "App. C.2.1; thesis 3.1 (Table 1)")
+    beta: JointParameters = described(
+        "Beta joint: coxa to femur.",
+        "App. C.2.1; thesis 3.1 (Table 1)")
+    gamma: JointParameters = described(
+        "Gamma joint: femur to tibia.",
+        "App. C.2.1; thesis 3.1 (Table 1)")
 
 
 class LinkageParameters(_Model):
@@ -164,13 +214,35 @@ class LinkageParameters(_Model):
     range exactly with γ centred on 90° (:func:`pneumaquad.robot.linkage.design_linkage`).
     """
 
-    parent_pivot_radius: PositiveLength
-    child_pivot_radius: PositiveLength | None = None
-    included_angle_at_zero: Angle | None = None
-    retracted_length: PositiveLength | None = None
-    direction: Literal[1, -1]
-    axial_offset: Coordinate = 0.0
-    moving_mass: NonNegativeMass
+    parent_pivot_radius: PositiveLength = described(
+        "Distance l3 of the barrel pivot from the joint axis, on the parent link.",
+        "eq 5.2.1–5.2.6 (Fig. 34–36); not in thesis: the lengths are not printed, ours are "
+        "chosen (docs/robot.md)")
+    child_pivot_radius: PositiveLength | None = described(
+        "Distance l1 of the rod-end pin from the joint axis, on the child link; given with "
+        "`included_angle_at_zero` and `retracted_length` (a measured linkage), or all three "
+        "left out to be designed from the stroke and the joint range.",
+        "eq 5.2.1–5.2.6; not in thesis: designed by default",
+        default=None)
+    included_angle_at_zero: Angle | None = described(
+        "Angle γ between the two pivot arms at the axis at zero joint angle; γ = "
+        "`included_angle_at_zero` + `direction`·θ.",
+        "eq 5.2.2, 5.2.4, 5.2.6; not in thesis: designed by default",
+        default=None)
+    retracted_length: PositiveLength | None = described(
+        "Pin-to-pin length l2 with the piston retracted; the length is l2 + x.",
+        "eq 5.2.1–5.2.6; not in thesis: designed by default",
+        default=None)
+    direction: Literal[1, -1] = described(
+        "Sign of the joint angle in the included angle: 1 or -1.",
+        "eq 5.2.2, 5.2.4, 5.2.6")
+    axial_offset: Coordinate = described(
+        "Offset of the cylinder along the joint axis (for the looks only).",
+        "not in thesis",
+        default=0.0)
+    moving_mass: NonNegativeMass = described(
+        "Moving mass of piston and rod.",
+        "not in thesis: a 3/8 in steel rod and piston for the stroke")
 
     @_model_validator(mode="after")
     def _all_or_none(self) -> LinkageParameters:
@@ -202,10 +274,20 @@ class CylinderMounting(_Model):
     ``supply.supply_pressure``; e.g. ``--set 'actuators.supply_pressure="45 psig"'``.
     """
 
-    alpha: str
-    beta: str
-    gamma: str
-    supply_pressure: AbsolutePressure | None = None
+    alpha: str = described(
+        "Actuator parameter set (a shipped name or a path) of the alpha joints.",
+        "App. C.1.1 (alpha's 3.75 in stroke: thesis 5.5.2.3)")
+    beta: str = described(
+        "Actuator parameter set of the beta joints.",
+        "App. C.1.1")
+    gamma: str = described(
+        "Actuator parameter set of the gamma joints.",
+        "App. C.1.1")
+    supply_pressure: AbsolutePressure | None = described(
+        "Regulated supply of all twelve cylinders in place of each actuator file's "
+        "`supply.supply_pressure`; gauge units refer to the gamma file's atmosphere.",
+        "not in thesis: one regulator for the robot",
+        default=None)
 
     def actuator_overrides(self) -> list[str]:
         """``--set`` items that load the actuator files with this robot's supply."""
@@ -223,58 +305,127 @@ class JointControllerParameters(ControllerParameters):
     the pressure sensors without a steady-state error.
     """
 
-    gain_scale: GainScale = 1.0
+    gain_scale: GainScale = described(
+        "Factor on Kp, Ki and Kd (0.75: the thesis's alpha gain reduced by 25 %).",
+        "thesis 5.5.2.4",
+        default=1.0)
     force_feedback_gain: Annotated[
         float, QuantityField("voltage_per_force"), Bounds(0.0, 1.0, "V/N", lower_inclusive=True)
-    ] = 0.0
-    force_feedback_time_constant: Annotated[Time, Bounds(0.0, MAX_TIME_CONSTANT, "s")] = 0.05
+    ] = described(
+        "Gain on the net pneumatic force's deviation from its low-pass mean: damping from the "
+        "pressure sensors without a steady-state error; 0 turns it off.",
+        "not in thesis: the thesis's PID has no pressure feedback (0)",
+        default=0.0)
+    force_feedback_time_constant: Annotated[
+        Time, Bounds(0.0, MAX_TIME_CONSTANT, "s")
+    ] = described(
+        "Time constant of the low-pass mean of the force feedback.",
+        "not in thesis",
+        default=0.05)
 
 
 class RobotControllerParameters(_Model):
     """Joint controllers per joint type, and stance/swing gain scales for scheduling."""
 
-    alpha: JointControllerParameters
-    beta: JointControllerParameters
-    gamma: JointControllerParameters
-    stance_gain_scale: GainScale = 1.0
-    swing_gain_scale: GainScale = 1.0
+    alpha: JointControllerParameters = described(
+        "Controller of the alpha joints.",
+        "thesis 5.5.2.3; not in thesis: gains not printed (our tuning, docs/robot.md)")
+    beta: JointControllerParameters = described(
+        "Controller of the beta joints.",
+        "thesis 5.5.2.2; not in thesis: gains not printed (our tuning)")
+    gamma: JointControllerParameters = described(
+        "Controller of the gamma joints.",
+        "thesis 5.5.2.1; not in thesis: gains not printed (our tuning)")
+    stance_gain_scale: GainScale = described(
+        "Gain factor of the joints of a leg whose foot is in contact (gain scheduling).",
+        "not in thesis",
+        default=1.0)
+    swing_gain_scale: GainScale = described(
+        "Gain factor of the joints of a swinging leg.",
+        "not in thesis",
+        default=1.0)
 
 
 class ContactParameters(_Model):
     """Friction coefficients (SrLib ``SetFriction``, App. C.2) and MuJoCo contact softness."""
 
-    ground_friction: FrictionCoefficient
-    foot_friction: FrictionCoefficient
-    body_friction: FrictionCoefficient = 1.0
-    time_constant: Annotated[Time, Bounds(0.0, 1.0, "s")] = 0.005
-    damping_ratio: Annotated[Number, Bounds(0.0, 100.0)] = 1.0
-    #: MuJoCo ``impratio``: impedance of the friction rows relative to the normal ones
-    #: (elliptic cones); above 1 a loaded contact creeps less under tangential force.
-    friction_impedance_ratio: Annotated[Number, Bounds(1.0, 1000.0, lower_inclusive=True)] = 1.0
-    #: MuJoCo ``cone``: the friction cone of every contact. ``"elliptic"`` (one row per
-    #: friction direction, exact Coulomb cone); ``"pyramidal"`` (MuJoCo's default: two rows
-    #: per direction, a polygonal approximation of the cone).
-    friction_cone: Literal["elliptic", "pyramidal"] = "elliptic"
+    ground_friction: FrictionCoefficient = described(
+        "Friction coefficient of the ground (MuJoCo takes the larger of a contact pair's).",
+        "App. C.2.4 User_Modeling l.7 gives 5.0; not in thesis: 0.8 shipped, as 5 locks the "
+        "feet (docs/robot.md)")
+    foot_friction: FrictionCoefficient = described(
+        "Friction coefficient of the feet (the tibiae).",
+        "App. C.2.1 l.43 gives 3.0; not in thesis: 0.8 shipped")
+    body_friction: FrictionCoefficient = described(
+        "Friction coefficient of the thorax and the upper links.",
+        "not in thesis",
+        default=1.0)
+    time_constant: Annotated[Time, Bounds(0.0, 1.0, "s")] = described(
+        "Contact softness: MuJoCo `solref` time constant.",
+        "not in thesis: MuJoCo contact model",
+        default=0.005)
+    damping_ratio: Annotated[Number, Bounds(0.0, 100.0)] = described(
+        "Contact softness: MuJoCo `solref` damping ratio.",
+        "not in thesis: MuJoCo contact model",
+        default=1.0)
+    friction_impedance_ratio: Annotated[
+        Number, Bounds(1.0, 1000.0, lower_inclusive=True)
+    ] = described(
+        "MuJoCo `impratio`: impedance of the friction rows relative to the normal ones "
+        "(elliptic cones); above 1 a loaded contact creeps less under tangential force.",
+        "not in thesis: MuJoCo option (docs/benchmarks.md)",
+        default=1.0)
+    friction_cone: Literal["elliptic", "pyramidal"] = described(
+        "MuJoCo `cone`: the friction cone of every contact, `elliptic` (one row per friction "
+        "direction, the exact Coulomb cone) or `pyramidal` (MuJoCo's default: two rows per "
+        "direction, a polygonal approximation of the cone).",
+        "not in thesis: MuJoCo option (docs/benchmarks.md)",
+        default="elliptic")
 
 
 class EnvironmentParameters(_Model):
     """Obstacles: block, ramp (App. C.2.3: 1.2 × 1.2 × 0.019 m), rough-terrain field."""
 
-    block_size: tuple[EnvironmentLength, EnvironmentLength, EnvironmentLength]
-    block_position: tuple[EnvironmentCoordinate, EnvironmentCoordinate, EnvironmentCoordinate]
-    ramp_size: tuple[EnvironmentLength, EnvironmentLength, EnvironmentLength]
-    ramp_position: tuple[EnvironmentCoordinate, EnvironmentCoordinate, EnvironmentCoordinate]
+    block_size: tuple[EnvironmentLength, EnvironmentLength, EnvironmentLength] = described(
+        "Block obstacle: its size (x, y, z).",
+        "not in thesis (Fig. 4 shows a block)")
+    block_position: tuple[
+        EnvironmentCoordinate, EnvironmentCoordinate, EnvironmentCoordinate
+    ] = described(
+        "Block obstacle: its position.",
+        "not in thesis")
+    ramp_size: tuple[EnvironmentLength, EnvironmentLength, EnvironmentLength] = described(
+        "Ramp plate: its size (x, y, z).",
+        "App. C.2.3 l.4")
+    ramp_position: tuple[
+        EnvironmentCoordinate, EnvironmentCoordinate, EnvironmentCoordinate
+    ] = described(
+        "Ramp plate: position of its lower edge.",
+        "not in thesis")
     ramp_slope: Annotated[
         float,
         QuantityField("angle"),
         Bounds(-math.pi / 3, math.pi / 3, "rad", lower_inclusive=True,
                lower_text="-π/3 rad (-60°)", upper_text="π/3 rad (60°)"),
-    ]
-    rough_size: tuple[EnvironmentLength, EnvironmentLength]
-    rough_position: tuple[EnvironmentCoordinate, EnvironmentCoordinate]
-    rough_max_height: PositiveLength
-    rough_cell: PositiveLength
-    rough_fill: Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True)] = 0.5
+    ] = described(
+        "Ramp plate: its slope, up in +x.",
+        "not in thesis: the listing's plate is flat")
+    rough_size: tuple[EnvironmentLength, EnvironmentLength] = described(
+        "Rough-terrain field: its size (x, y).",
+        "not in thesis")
+    rough_position: tuple[EnvironmentCoordinate, EnvironmentCoordinate] = described(
+        "Rough-terrain field: its position (x, y).",
+        "App. C.2.4 l.11 (1 m ahead)")
+    rough_max_height: PositiveLength = described(
+        "Rough-terrain field: height of a raised cell.",
+        "not in thesis")
+    rough_cell: PositiveLength = described(
+        "Rough-terrain field: cell size.",
+        "not in thesis")
+    rough_fill: Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True)] = described(
+        "Rough-terrain field: fraction of cells raised.",
+        "App. C.2.4 l.11 (\"HALF RANDOM\")",
+        default=0.5)
 
 
 class TestbedParameters(_Model):
@@ -284,11 +435,21 @@ class TestbedParameters(_Model):
     ``axle_drop`` below the thorax axis.
     """
 
-    wheel_radius: PositiveLength
-    wheel_width: PositiveLength
-    wheel_mass: Annotated[Mass, Bounds(0.0, MAX_MASS, "kg")]
-    axle_drop: NonNegativeLength
-    track_width: PositiveLength
+    wheel_radius: PositiveLength = described(
+        "Radius of the rear wheels.",
+        "thesis 3.1.2 (training wheels); not in thesis: sizes")
+    wheel_width: PositiveLength = described(
+        "Width of a rear wheel.",
+        "thesis 3.1.2; not in thesis: sizes")
+    wheel_mass: Annotated[Mass, Bounds(0.0, MAX_MASS, "kg")] = described(
+        "Mass of a rear wheel.",
+        "thesis 3.1.2; not in thesis: sizes")
+    axle_drop: NonNegativeLength = described(
+        "Distance of the axle below the thorax axis.",
+        "thesis 3.1.2; not in thesis: sizes")
+    track_width: PositiveLength = described(
+        "Distance between the two wheels.",
+        "thesis 3.1.2; not in thesis: sizes")
 
 
 class RobotSimulationParameters(_Model):
@@ -314,39 +475,115 @@ class RobotSimulationParameters(_Model):
     (a constant reflected inertia, cheaper).
     """
 
-    control_step: ControlStep
-    substeps: StepCount
-    physics_steps: StepCount = 1
-    integrator: Literal["implicitfast", "implicit", "euler", "rk4"] = "implicitfast"
-    seal_friction: Literal["mujoco", "actuator"] = "mujoco"
-    noslip_iterations: Annotated[StrictInt, Bounds(0, 1000, lower_inclusive=True)] = 0
-    solver: Literal["newton", "cg", "pgs"] = "newton"
-    solver_iterations: Annotated[StrictInt, Bounds(1, 10000, lower_inclusive=True)] = 50
-    solver_tolerance: Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True)] = 1e-8
-    constraint_islands: StrictBool = True
-    piston_inertia: Literal["tendon", "joint"] = "tendon"
-    recording_every: Annotated[StrictInt, Bounds(1, 1_000_000, lower_inclusive=True)] = 10
+    control_step: ControlStep = described(
+        "Period of the controllers and the pneumatic kernel.",
+        "thesis 5.5.4 (1000 Hz)")
+    substeps: StepCount = described(
+        "Heun steps of the pneumatic kernel per control step.",
+        "not in thesis (docs/robot.md)")
+    physics_steps: StepCount = described(
+        "MuJoCo steps per control step.",
+        "not in thesis",
+        default=1)
+    integrator: Literal["implicitfast", "implicit", "euler", "rk4"] = described(
+        "MuJoCo `integrator`.",
+        "not in thesis: MuJoCo option (`implicitfast` is MuJoCo's recommended one)",
+        default="implicitfast")
+    seal_friction: Literal["mujoco", "actuator"] = described(
+        "Where cylinder friction lives: `mujoco`, dry friction in the constraint solver (tendon "
+        "`frictionloss`, Stribeck breakaway updated each step), or `actuator`, the actuator "
+        "file's force law on the motor.",
+        "not in thesis: friction in the dynamics engine, as thesis 5.6.1 suggests",
+        default="mujoco")
+    noslip_iterations: Annotated[StrictInt, Bounds(0, 1000, lower_inclusive=True)] = described(
+        "MuJoCo `noslip_iterations`: no-slip post-processing of the friction rows (0: off).",
+        "not in thesis: MuJoCo option (docs/benchmarks.md)",
+        default=0)
+    solver: Literal["newton", "cg", "pgs"] = described(
+        "MuJoCo `solver`: `newton`, conjugate gradient (`cg`) or projected Gauss-Seidel "
+        "(`pgs`).",
+        "not in thesis: MuJoCo option (docs/benchmarks.md)",
+        default="newton")
+    solver_iterations: Annotated[StrictInt, Bounds(1, 10000, lower_inclusive=True)] = described(
+        "MuJoCo `iterations`: the most solver iterations per step.",
+        "not in thesis: MuJoCo option (docs/benchmarks.md)",
+        default=50)
+    solver_tolerance: Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True)] = described(
+        "MuJoCo `tolerance`: the solver stops once its relative cost improvement is below it "
+        "(0: every iteration runs).",
+        "not in thesis: MuJoCo option (docs/benchmarks.md)",
+        default=1e-8)
+    constraint_islands: StrictBool = described(
+        "MuJoCo's island discovery: the constraint rows split into independent groups solved "
+        "one by one (false sets the `island` disable flag).",
+        "not in thesis: MuJoCo option (docs/benchmarks.md)",
+        default=True)
+    piston_inertia: Literal["tendon", "joint"] = described(
+        "Where each cylinder's moving mass m lives: `tendon`, the tendon's armature (m·ẋ², "
+        "exact), or `joint`, the hinge's armature m·⟨r²⟩ with ⟨r²⟩ the mean squared moment arm "
+        "over the joint range (constant, cheaper).",
+        "not in thesis: the cylinders modelled as parts of the linkage, as thesis 6.6.2 "
+        "suggests",
+        default="tendon")
+    recording_every: Annotated[
+        StrictInt, Bounds(1, 1_000_000, lower_inclusive=True)
+    ] = described(
+        "Control steps per recorded row.",
+        "not in thesis",
+        default=10)
 
 
 class RobotParameters(_Model):
     """A complete robot parameter set (see module docstring)."""
 
-    meta: Meta
-    actuators: CylinderMounting
-    thorax: LinkParameters
-    coxa1: LinkParameters
-    coxa2: LinkParameters
-    femur: LinkParameters
-    tibia: LinkParameters
-    leg: LegParameters
-    mounts: dict[Literal[LEG_NAMES], Frame]  # type: ignore[valid-type]
-    placement: Frame
-    linkages: dict[Literal[JOINT_NAMES], LinkageParameters]  # type: ignore[valid-type]
-    contact: ContactParameters
-    environment: EnvironmentParameters
-    controller: RobotControllerParameters
-    simulation: RobotSimulationParameters
-    testbed: TestbedParameters
+    meta: Meta = described(
+        "Identification of the set.",
+        "not in thesis: bookkeeping")
+    actuators: CylinderMounting = described(
+        "Which actuator file drives each joint type, and the robot's shared supply.",
+        "App. C.1.1")
+    thorax: LinkParameters = described(
+        "The body.",
+        "App. C.2.2 l.24–28")
+    coxa1: LinkParameters = described(
+        "First capsule of the coxa (the hip, moved by alpha).",
+        "App. C.2.1 l.3–8")
+    coxa2: LinkParameters = described(
+        "Second capsule of the coxa, welded to the first.",
+        "App. C.2.1 l.16–18")
+    femur: LinkParameters = described(
+        "The femur (moved by beta).",
+        "App. C.2.1 l.26–30")
+    tibia: LinkParameters = described(
+        "The tibia, whose end is the foot (moved by gamma).",
+        "App. C.2.1 l.38–43")
+    leg: LegParameters = described(
+        "Joint frames and limits of a leg (the same for all four).",
+        "App. C.2.1")
+    mounts: dict[Literal[LEG_NAMES], Frame] = described(  # type: ignore[valid-type]
+        "The alpha joint's frame on the thorax, per leg (SrLib L1, R1, L2, R2).",
+        "App. C.2.2 l.5–20")
+    placement: Frame = described(
+        "The thorax's frame in the world at the start.",
+        "App. C.2.4 User_Modeling l.10")
+    linkages: dict[Literal[JOINT_NAMES], LinkageParameters] = described(  # type: ignore[valid-type]
+        "Cylinder linkage per joint type.",
+        "thesis 5.2 (Fig. 34–36)")
+    contact: ContactParameters = described(
+        "Friction and contact softness.",
+        "App. C.2 (`SetFriction`)")
+    environment: EnvironmentParameters = described(
+        "Obstacles of the environments.",
+        "App. C.2.3, C.2.4")
+    controller: RobotControllerParameters = described(
+        "Joint controllers.",
+        "thesis 5.5.2")
+    simulation: RobotSimulationParameters = described(
+        "Coupled-simulation settings.",
+        "thesis 5.5.4")
+    testbed: TestbedParameters = described(
+        "The two-legged testbed's rear wheels.",
+        "thesis 3.1.2")
 
     @_model_validator(mode="after")
     def _complete(self) -> RobotParameters:
