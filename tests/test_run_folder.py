@@ -191,3 +191,21 @@ def test_the_parquet_recording_describes_itself(tmp_path: Path) -> None:
     assert metadata.file["parameters.toml"] == run.parameters
     csv_units = read_table_metadata(tmp_path / "run" / "recording.csv").units
     assert csv_units == run.units
+
+
+def test_read_run_reads_a_folder_with_its_units_and_parameters(tmp_path: Path) -> None:
+    """``pneumaquad.read_run`` (the earlier ``read_run_folder`` still works): the resolved
+    parameters carried in the Parquet metadata validate into the parameters written."""
+    import pneumaquad
+    from pneumaquad.io.tables import read_table_metadata
+
+    _write_run(tmp_path / "run")
+    run = pneumaquad.read_run(tmp_path / "run")
+    assert pneumaquad.read_run_folder is pneumaquad.read_run
+    assert str(tmp_path / "run") == str(run.path)
+    assert run.units == {"time [s]": "s", "position [m]": "m", "cap pressure [Pa]": "Pa"}
+    assert run.summary["description"] == "round trip"
+    copied = tmp_path / "from-metadata.toml"
+    copied.write_text(read_table_metadata(run.recording_file).file["parameters.toml"],
+                      encoding="utf-8")
+    assert load_rig(copied) == load_rig("thesis-rig") == load_rig(run.parameters_file)

@@ -9,8 +9,9 @@ The few names most work starts from are available here; each is loaded on first 
   loop, e.g. a parameter sweep) and the reference signals in :mod:`signals`;
 - the robot: :func:`build_robot` (MuJoCo model on the 12 cylinders) and
   :class:`RobotSimulation` (the coupled actuator + MuJoCo step);
-- results: :func:`read_run_folder` (recording, parameters and summary of a run folder)
-  and :func:`read_recording` (a recording file or a run folder's recording).
+- results: :func:`read_run` (recording with units, parameters and summary of a run
+  folder; also under its earlier name ``read_run_folder``) and :func:`read_recording` (a
+  recording file or a run folder's recording).
 
 Everything else lives in the layers listed in the README's "Layout".
 """
@@ -37,6 +38,7 @@ _PUBLIC = {
     "signals": "pneumaquad.rig.signals",
     "build_robot": "pneumaquad.robot.builder",
     "RobotSimulation": "pneumaquad.robot.simulation",
+    "read_run": "pneumaquad.io.run_folder",
     "read_run_folder": "pneumaquad.io.run_folder",
     "read_recording": "pneumaquad.io.run_folder",
 }

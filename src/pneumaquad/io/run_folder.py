@@ -1,5 +1,6 @@
 """The run folder: one versioned layout, one writer (:class:`RunFolderWriter`) and one
-reader (:func:`read_run_folder`). docs/run-folder.md describes the contract.
+reader (:func:`read_run`, also named :data:`read_run_folder`). docs/run-folder.md describes
+the contract.
 
 Every simulator run (rig, robot, networked peer) writes a folder holding
 
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -43,7 +45,7 @@ __all__ = [
     "TRAJECTORY_NAME",
     "RunFolder", "RunFolderError", "RunFolderVersionError", "RunFolderWriter", "RunRecorder",
     "create_run_folder", "detect_run_kind", "json_text", "jsonable", "read_recording",
-    "read_run_folder", "read_summary", "write_json",
+    "read_run", "read_run_folder", "read_summary", "write_json",
 ]
 
 #: Version of the layout below, written into every summary under :data:`FORMAT_KEY`.
@@ -356,7 +358,7 @@ def detect_run_kind(raw: Mapping[str, Any]) -> RunKind:
 
 @dataclass(frozen=True)
 class RunFolder:
-    """A run folder as read by :func:`read_run_folder`.
+    """A run folder as read by :func:`read_run`.
 
     Attributes
     ----------
@@ -413,12 +415,27 @@ class RunFolder:
         return file if file.is_file() else None
 
 
-def read_run_folder(path: Path) -> RunFolder:
-    """Read a run folder: parameters, recording, summary and timing.
+def read_run(path: str | os.PathLike[str]) -> RunFolder:
+    """Read a run folder in one call: recording (with units), parameters and summary.
 
-    An interrupted run reads like any other (its summary says ``"interrupted": true``);
-    a run killed before it closed has only ``recording.csv`` (its unterminated last line
-    dropped) and no summary, which is read as format 1 with a note.
+    Also available as ``pneumaquad.read_run`` and, under its earlier name, as
+    :data:`read_run_folder`. An interrupted run reads like any other (its summary says
+    ``"interrupted": true``); a run killed before it closed has only ``recording.csv``
+    (its unterminated last line dropped) and no summary, which is read as format 1 with a
+    note.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The run folder.
+
+    Returns
+    -------
+    RunFolder
+        Its recording (``recording``, columns ``quantity [unit]`` in SI; ``units`` maps
+        each column to its unit), the resolved parameters (``parameters``, the text of
+        ``parameters.toml``), ``summary``, ``kind``, format ``version``, ``timing`` of a
+        networked run and ``notes`` on what was missing.
 
     Raises
     ------
@@ -460,3 +477,7 @@ def read_run_folder(path: Path) -> RunFolder:
             notes.append(f"{TIMING_NAME} cannot be read: {error}")
     return RunFolder(path, version, kind, parameters, recording, recording_file, summary,
                      timing, notes)
+
+
+#: :func:`read_run` under its earlier name, kept for existing callers.
+read_run_folder = read_run
