@@ -361,6 +361,8 @@ class ActuatorBank:
         rod_pressure : float or ndarray (N,), optional
             Absolute rod chamber pressures [Pa]; the cap pressures by default.
 
+        Notes
+        -----
         The chamber masses follow from the ideal gas law at the supply temperature
         (:func:`~pneumaquad.core.actuator.initial_state`); PID memory and outputs are
         zeroed and the supply returns to its initial state (a full tank, nothing

@@ -53,6 +53,8 @@ class CrawlGaitPolicy:
         gait's first pose (:attr:`initial_angles`) before the gait starts; 0 starts the
         gait at once (start the environment in :attr:`initial_angles` then).
 
+    Notes
+    -----
     After the lead-in the gait's first cycle (its start-up from a symmetric stance)
     plays once, then its steady cycle repeats for as long as the policy is called.
     """
