@@ -1,13 +1,14 @@
 # Two entry points for a fresh machine:
 #   make demo   set up .venv and run the representative rig demo (writes runs/demo/)
 #   make test   set up .venv and run the test suite
-# Both install the exact versions of requirements.lock; `make lock` refreshes it.
+#   make docs   build the documentation site into site/ (warnings are errors)
+# Each installs the exact versions of requirements.lock; `make lock` refreshes it.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 LOCK := requirements.lock
 
-.PHONY: demo test test-all setup lint bench lock
+.PHONY: demo test test-all setup lint bench lock docs
 
 $(BIN)/pneumaquad: pyproject.toml $(LOCK)
 	$(PYTHON) -m venv $(VENV)
@@ -41,6 +42,11 @@ test-all: setup
 
 lint: setup
 	$(BIN)/ruff check .
+
+# The documentation site (mkdocs.yml): guide pages, API reference from the docstrings and
+# the parameter reference from the schema, into site/; any warning fails the build.
+docs: setup
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --site-dir site
 
 bench: setup
 	$(BIN)/python benchmarks/kernel_cost.py
