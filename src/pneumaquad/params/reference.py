@@ -15,6 +15,7 @@ Run ``python -m pneumaquad.params.reference`` to print the tables.
 
 from __future__ import annotations
 
+import re
 import types
 import typing
 from collections.abc import Iterator, Sequence
@@ -341,9 +342,18 @@ def _table(rows: list[ReferenceRow]) -> list[str]:
     return lines
 
 
+_ROLE = re.compile(r":\w+:`(?P<tilde>~?)(?P<name>[^`<]+?)(?:\s*<[^`>]*>)?`")
+
+
+def _role_text(match: re.Match[str]) -> str:
+    name = match["name"].strip()
+    return f"`{name.rsplit('.', 1)[-1] if match['tilde'] else name}`"
+
+
 def _doc_summary(model: type[BaseModel]) -> str:
+    """The first paragraph of a model's docstring, Sphinx roles shown as code."""
     doc = (model.__doc__ or "").strip().split("\n\n")[0]
-    return " ".join(doc.split())
+    return _ROLE.sub(_role_text, " ".join(doc.split()))
 
 
 def parameter_reference(heading_level: int = 2) -> str:
