@@ -19,6 +19,7 @@ RANK = {
     "demo": 9,
     "network": 8,
     "interop": 8,
+    "validation": 8,
     "studies": 8,
     "locomotion": 7,
     "robot": 6,

@@ -61,18 +61,25 @@ def report_command(
     output: Annotated[
         Path | None,
         typer.Option("--output", "-o", help="Report folder (default RUN/report, or "
-                     "runs/cost-table with --cost-table)."),
+                     "runs/cost-table with --cost-table, runs/thesis-comparison with "
+                     "--thesis-comparison)."),
     ] = None,
     cost_table: Annotated[
         bool,
         typer.Option("--cost-table", help="Instead of a run: time the rig model with "
                      "components simplified (thesis Table 3) and report that."),
     ] = False,
+    thesis_comparison: Annotated[
+        bool,
+        typer.Option("--thesis-comparison", help="Instead of a run: measure every "
+                     "closed-loop claim of thesis 4.3 and 5.5 for our tuning and the thesis "
+                     "controller set, and write thesis-comparison.md (docs/ ships it)."),
+    ] = False,
     params: Annotated[
         str, typer.Option("--params", "-p", help="Rig parameter set for --cost-table.")
     ] = "thesis-rig",
     repeats: Annotated[int, typer.Option(
-        help="--cost-table: timed repeats, 2 to 1000.",
+        help="--cost-table, --thesis-comparison: timed repeats, 2 to 1000.",
         callback=option_range(Bounds(2, 1000, lower_inclusive=True)))] = 15,
     duration: Annotated[
         float, typer.Option(help="--cost-table: simulated time per run [s], 0.1 to 3600.",
@@ -85,6 +92,9 @@ def report_command(
     Table 3 measured on this machine."""
     if cost_table:
         _cost_table(output or Path("runs/cost-table"), params, repeats, duration)
+        return
+    if thesis_comparison:
+        _thesis_comparison(output or Path("runs/thesis-comparison"), repeats)
         return
     if run is None:
         _fail(ValueError("give a run folder, or --cost-table"))
@@ -110,3 +120,16 @@ def _cost_table(output: Path, params: str, repeats: int, duration: float) -> Non
         _fail(error)
     typer.echo(cost_table_markdown(table))
     console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)
+
+
+def _thesis_comparison(output: Path, repeats: int) -> None:
+    from pneumaquad.validation.comparison import measure_comparison
+    from pneumaquad.validation.comparison_page import write_comparison_page
+
+    try:
+        with progress_bar("thesis comparison") as update:
+            comparison = measure_comparison(repeats, progress=update)
+        page = write_comparison_page(comparison, output)
+    except REPORT_ERRORS as error:
+        _fail(error)
+    console.print(f"page: [bold]{page}[/bold]", soft_wrap=True)
