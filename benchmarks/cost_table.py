@@ -14,99 +14,14 @@ Run: ``.venv/bin/python benchmarks/cost_table.py [--json out.json]``.
 from __future__ import annotations
 
 import argparse
-import time
 
-import numpy as np
-from numba import njit
-
-from _bench import machine_line, stats, table, write_json
-from pneumaquad.core.physics.valve import input_pressure, polynomial_area, simple_valve_area
-from pneumaquad.core.pneumatics import friction_of, friction_slope_of
-from pneumaquad.params import RigSetup, load_rig
+from _bench import machine_line, table, write_json
+from pneumaquad.params import load_rig
+from pneumaquad.reporting.component_costs import component_costs
 from pneumaquad.reporting.cost_report import cost_table_markdown
 from pneumaquad.reporting.cost_table import measure_cost_table
-from pneumaquad.rig.model import pack_rig_parameters
 
 INCH = 0.0254
-@njit(cache=False)
-def polynomial_loop(centered, negative, positive):
-    total = 0.0
-    for u in centered:
-        total += polynomial_area(u, negative, positive)
-    return total
-
-
-@njit(cache=False)
-def linear_loop(centered, max_area, leak_area, full_scale):
-    total = 0.0
-    for u in centered:
-        total += 0.09 * simple_valve_area(u, max_area, leak_area, full_scale)
-    return total
-
-
-@njit(cache=False)
-def tanh_pressure_loop(centered, supply, exhaust, high, low):
-    total = 0.0
-    for u in centered:
-        total += input_pressure(u, supply, exhaust, high, low)
-    return total
-
-
-@njit(cache=False)
-def plain_pressure_loop(centered, supply, exhaust):
-    total = 0.0
-    for u in centered:
-        total += supply if u >= 0.0 else exhaust
-    return total
-
-
-@njit(cache=False)
-def friction_loop(p, velocities):
-    """Friction force and its slope, as rig_mechanics_substep evaluates them per substep."""
-    total = 0.0
-    for v in velocities:
-        total += friction_of(p, v, 0.0) + friction_slope_of(p, v, 0.0)
-    return total
-
-
-def component_costs(setup: RigSetup, repeats: int) -> list[tuple[str, float, float, int]]:
-    """(component, ns per call, ns per call of its replacement, calls per 1 ms step)."""
-    n = 50000
-    wave = np.sin(np.linspace(0.0, 60.0 * np.pi, n))
-    centered, velocities = 2.0 * wave, 0.05 * wave
-    row = pack_rig_parameters(setup)[0]
-    viscous = pack_rig_parameters(load_rig("thesis-rig", overrides=['friction.model="viscous"']))[0]
-    neg = row["cap_polynomial_negative"].copy()
-    pos = row["cap_polynomial_positive"].copy()
-    ps, pe = row["supply_pressure"], row["exhaust_pressure"]
-    hi, lo = row["cap_high_pressure_cutoff"], row["cap_low_pressure_cutoff"]
-    calls = {
-        "poly": lambda: polynomial_loop(centered, neg, pos),
-        "linear": lambda: linear_loop(centered, 1e-5, 2e-7, 5.0),
-        "tanh": lambda: tanh_pressure_loop(centered, ps, pe, hi, lo),
-        "plain": lambda: plain_pressure_loop(centered, ps, pe),
-        "stribeck": lambda: friction_loop(row, velocities),
-        "viscous": lambda: friction_loop(viscous, velocities),
-    }
-    ns = {}
-    for name, call in calls.items():
-        call()
-        samples = []
-        for _ in range(repeats):
-            start = time.perf_counter()
-            call()
-            samples.append((time.perf_counter() - start) / n * 1e9)
-        ns[name] = stats(samples).median
-    sub = setup.simulation.substeps
-    # The valve map (areas and input pressures, cap and rod) is evaluated once per
-    # control step when there is no spool lag; the friction law once per substep.
-    return [
-        ("area polynomials -> linear area", ns["poly"], ns["linear"], 2),
-        ("tanh input pressures -> plain", ns["tanh"], ns["plain"], 2),
-        ("Stribeck-tanh -> viscous (force + slope)", ns["stribeck"], ns["viscous"], sub),
-    ]
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--duration", type=float, default=10.0, help="simulated time [s]")
@@ -142,25 +57,23 @@ def main() -> None:
         for row in cost.rows
     }
 
-    parts = component_costs(load_rig("thesis-rig"), args.repeats)
     part_rows = []
-    for name, full, simpler, per_step in parts:
-        saving = (full - simpler) * per_step / 1e3
+    for part in component_costs(load_rig("thesis-rig"), args.repeats):
         part_rows.append(
             [
-                name,
-                f"{full:.1f}",
-                f"{simpler:.1f}",
-                per_step,
-                f"{saving:.2f}",
-                f"{100 * saving / complete:.1f}",
+                part.name,
+                f"{part.ns_per_call:.1f}",
+                f"{part.replacement_ns_per_call:.1f}",
+                part.calls_per_step,
+                f"{part.saving_us:.2f}",
+                f"{100 * part.saving_us / complete:.1f}",
             ]
         )
-        figures[f"component: {name}"] = {
-            "ns_per_call": full,
-            "replacement_ns_per_call": simpler,
-            "calls_per_step": per_step,
-            "saving_us": saving,
+        figures[f"component: {part.name}"] = {
+            "ns_per_call": part.ns_per_call,
+            "replacement_ns_per_call": part.replacement_ns_per_call,
+            "calls_per_step": part.calls_per_step,
+            "saving_us": part.saving_us,
         }
     print("\nisolated component costs (compiled loops on smooth inputs; estimates):")
     print(

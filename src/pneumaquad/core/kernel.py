@@ -33,8 +33,8 @@ from pneumaquad.core.pneumatics import (
     draw_from_tank,
     finish_outputs,
     flow_constants,
+    friction_and_slope_of,
     friction_of,
-    friction_slope_of,
     heun_pneumatics,
     pneumatic_force_of,
     pneumatic_rates,
@@ -149,7 +149,8 @@ def rig_mechanics_substep(p, s, time_step, out):
     if stop != 0.0 and not resting_on_stop:
         stiffness = p.end_stop_stiffness
         stop_damping = p.end_stop_damping
-    damping = friction_slope_of(p, v, s.bristle_deflection)
+    # the law at the start velocity; a LuGre force is taken again after the bristle step
+    friction, damping = friction_and_slope_of(p, v, s.bristle_deflection)
     effective_mass = mass + h * (damping + stop_damping) + h * h * stiffness
     if dry_model:
         viscous = p.viscous_coefficient if model == FRICTION_COULOMB_VISCOUS else 0.0
@@ -167,8 +168,9 @@ def rig_mechanics_substep(p, s, time_step, out):
             v_new = free - h * dry / effective_mass
         friction = dry + viscous * v_new
     else:
-        s.bristle_deflection = advance_bristle(p, s.bristle_deflection, v, h)
-        friction = friction_of(p, v, s.bristle_deflection)
+        if model == FRICTION_LUGRE:
+            s.bristle_deflection = advance_bristle(p, s.bristle_deflection, v, h)
+            friction = friction_of(p, v, s.bristle_deflection)
         v_new = v + h * (force + stop - friction - h * stiffness * v) / effective_mass
         if model != FRICTION_LUGRE and v_new * v < 0.0:
             # The friction force, taken at the old velocity, overshot through zero. A law

@@ -32,10 +32,12 @@ from pneumaquad.core.physics.chamber import (
 from pneumaquad.core.physics.force import piston_force
 from pneumaquad.core.physics.friction import (
     FRICTION_LUGRE,
+    FRICTION_STRIBECK_TANH,
     friction_damping,
     friction_force,
     lugre_bristle_update,
     stribeck_curve,
+    stribeck_tanh_force_and_slope,
 )
 from pneumaquad.core.physics.orifice import (
     area_to_sonic_conductance,
@@ -397,6 +399,19 @@ def friction_slope_of(p, velocity, bristle):
         p.bristle_damping,
         bristle,
     )
+
+
+@compiled
+def friction_and_slope_of(p, velocity, bristle):
+    """Friction force [N] and dissipative slope [N s/m] of actuator ``p`` at one velocity
+    and bristle deflection: :func:`friction_of` and :func:`friction_slope_of` together,
+    the Stribeck-tanh law's curve and tanh evaluated once
+    (:func:`pneumaquad.core.physics.friction.stribeck_tanh_force_and_slope`)."""
+    if p.friction_model == FRICTION_STRIBECK_TANH:
+        return stribeck_tanh_force_and_slope(
+            velocity, p.static_force, p.coulomb_force, p.viscous_coefficient,
+            p.stribeck_velocity, p.stribeck_exponent, p.tanh_coefficient)
+    return friction_of(p, velocity, bristle), friction_slope_of(p, velocity, bristle)
 
 
 @compiled

@@ -34,7 +34,7 @@ from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update, scale_gains
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.kernel import advance_actuators
 from pneumaquad.core.physics.friction import stribeck_curve
-from pneumaquad.core.pneumatics import friction_of, friction_slope_of, state_outputs
+from pneumaquad.core.pneumatics import friction_and_slope_of, state_outputs
 
 #: One cylinder linkage (pneumaquad.robot.linkage, eq 5.2.1-5.2.6).
 LINKAGE_DTYPE = np.dtype([
@@ -282,8 +282,9 @@ def control_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Ac
             p = params[i]
             bristle = state[i].bristle_deflection
             applied_damping = mujoco.tendon_damping[tendon]  # in MuJoCo's passive force
-            force += applied_damping * v - friction_of(p, v, bristle)
-            mujoco.tendon_damping[tendon] = max(friction_slope_of(p, v, bristle), 0.0)
+            friction, slope = friction_and_slope_of(p, v, bristle)
+            force += applied_damping * v - friction
+            mujoco.tendon_damping[tendon] = max(slope, 0.0)
         mujoco.control[mujoco.actuator_ids[i]] = force
 
 

@@ -17,6 +17,25 @@ FRICTION_COULOMB_VISCOUS = 2
 FRICTION_STRIBECK_TANH = 3
 FRICTION_LUGRE = 4
 
+#: exp(-x) is exactly 0.0 in double precision beyond this [-] (the smallest subnormal is
+#: exp(-745.13)).
+EXP_UNDERFLOW = 746.0
+#: tanh(x) is exactly ±1.0 in double precision beyond this [-] (from x = 19.06 on; the
+#: C library returns ±1 outright above 22).
+TANH_SATURATION = 22.0
+
+
+@compiled
+def saturating_tanh(x: float) -> float:
+    """tanh(x) [-], returning ±1.0 without the call where it is exactly that
+    (|x| > :data:`TANH_SATURATION`): the same value, bit for bit, cheaper for a piston
+    that moves."""
+    if x > TANH_SATURATION:
+        return 1.0
+    if x < -TANH_SATURATION:
+        return -1.0
+    return math.tanh(x)
+
 
 @compiled
 def stribeck_curve(
@@ -44,9 +63,10 @@ def stribeck_curve(
     float
         g(v) [N], between Fc and Fs.
     """
-    return coulomb_force + (static_force - coulomb_force) * math.exp(
-        -((abs(velocity) / stribeck_velocity) ** stribeck_exponent)
-    )
+    exponent = (abs(velocity) / stribeck_velocity) ** stribeck_exponent
+    if exponent > EXP_UNDERFLOW:  # exp(-exponent) is exactly 0.0: skip it
+        return coulomb_force
+    return coulomb_force + (static_force - coulomb_force) * math.exp(-exponent)
 
 
 @compiled
@@ -82,7 +102,56 @@ def stribeck_tanh_force(
         Friction force [N].
     """
     g = stribeck_curve(velocity, static_force, coulomb_force, stribeck_velocity, stribeck_exponent)
-    return g * math.tanh(tanh_coefficient * velocity) + viscous_coefficient * velocity
+    return g * saturating_tanh(tanh_coefficient * velocity) + viscous_coefficient * velocity
+
+
+@compiled
+def stribeck_tanh_force_and_slope(
+    velocity: float,
+    static_force: float,
+    coulomb_force: float,
+    viscous_coefficient: float,
+    stribeck_velocity: float,
+    stribeck_exponent: float,
+    tanh_coefficient: float,
+) -> tuple[float, float]:
+    """Stribeck-tanh friction of eq 4.2.6 and its dissipative slope, sharing one Stribeck
+    curve and one tanh.
+
+    The force is :func:`stribeck_tanh_force`'s, bit for bit; the slope is
+    g(v)·k_tanh·(1 - tanh²(k_tanh·v)) + Cv clipped at zero, with 1 - tanh² written as
+    (1 - t)(1 + t), which is exact to rounding where t is close to ±1 (the falling branch
+    of the Stribeck curve left explicit, as :func:`friction_damping`). One exponential,
+    one power and one tanh instead of the two exponentials, two powers, a tanh and a cosh
+    of the force and the slope evaluated apart, and for a moving piston neither the
+    exponential nor the tanh where their values are exactly 0 and ±1
+    (:func:`stribeck_curve`, :func:`saturating_tanh`).
+
+    Parameters
+    ----------
+    velocity : float
+        v [m/s].
+    static_force, coulomb_force : float
+        Fs, Fc [N].
+    viscous_coefficient : float
+        Cv [N s/m].
+    stribeck_velocity : float
+        vS [m/s].
+    stribeck_exponent : float
+        i [-].
+    tanh_coefficient : float
+        k_tanh [s/m].
+
+    Returns
+    -------
+    tuple of float
+        Friction force [N] and dF/dv clipped at zero [N s/m].
+    """
+    g = stribeck_curve(velocity, static_force, coulomb_force, stribeck_velocity, stribeck_exponent)
+    t = saturating_tanh(tanh_coefficient * velocity)
+    force = g * t + viscous_coefficient * velocity
+    slope = g * tanh_coefficient * (1.0 - t) * (1.0 + t) + viscous_coefficient
+    return force, max(slope, 0.0)
 
 
 @compiled
