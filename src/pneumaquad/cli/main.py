@@ -450,6 +450,7 @@ def demo(
 
 def _register_robot_commands() -> None:
     from pneumaquad.cli.console import console_command
+    from pneumaquad.cli.export import export_app
     from pneumaquad.cli.fit import fit_app
     from pneumaquad.cli.report import report_command
     from pneumaquad.cli.robot import leg_app, robot_app, video_command
@@ -458,6 +459,7 @@ def _register_robot_commands() -> None:
 
     app.add_typer(fit_app, name="fit")
     app.command("console")(console_command)
+    app.add_typer(export_app, name="export")
     app.command("report")(report_command)
     app.add_typer(leg_app, name="leg")
     app.add_typer(robot_app, name="robot")
