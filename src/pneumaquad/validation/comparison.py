@@ -8,9 +8,11 @@ tuning (``thesis-rig`` / ``crr-quadruped``) and the thesis controller set
 
 from __future__ import annotations
 
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -39,6 +41,7 @@ from pneumaquad.validation.rig_loop import RigLoopFigures, rig_loop_figures
 
 __all__ = [
     "CONTROLLER_SETS",
+    "WALK_DISTANCE",
     "Comparison",
     "ControllerSet",
     "SetFigures",
@@ -81,12 +84,16 @@ class SetFigures:
         Walking-motion figures per alpha gain scale (1 and 0.75).
     walking_tracks : dict of float to tuple
         The walking motion's time [s] and per-joint (angle, reference) [rad] per scale.
+    walk : dict
+        The judgement of the quadruped's default walk of :data:`WALK_DISTANCE` on flat
+        ground (``robot walk``; summary.json's ``"walking"``).
     """
 
     rig: RigLoopFigures
     joints: dict[str, JointFigures]
     walking: dict[float, list[FootCycleFigures]]
     walking_tracks: dict[float, tuple[np.ndarray, dict]] = field(repr=False)
+    walk: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -170,6 +177,24 @@ def targets_of(figures: SetFigures) -> list[Target]:
     return rows
 
 
+#: Distance of the walk that decides which controller set is the default [m].
+WALK_DISTANCE = 0.5
+
+
+def _walk(robot_params: str) -> dict:
+    """The default walk of :data:`WALK_DISTANCE` on flat ground with ``robot_params``."""
+    from pneumaquad.locomotion.walk_run import run_walk
+    from pneumaquad.locomotion.walking import WalkSettings
+    from pneumaquad.params import load_robot
+    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.robot.simulation import RobotSimulation
+
+    simulation = RobotSimulation(build_robot(load_robot(robot_params), "quadruped", "flat", 0))
+    with tempfile.TemporaryDirectory() as folder:
+        walk = run_walk(simulation, WalkSettings(distance=WALK_DISTANCE), Path(folder) / "walk")
+    return walk.outcome or {"success": False, "reasons": ["the walk did not begin"]}
+
+
 def _measure_set(controller_set: ControllerSet) -> SetFigures:
     rig = rig_loop_figures([load_rig(controller_set.rig)])[0]
     joints = {joint: joint_figures(joint, controller_set.robot)
@@ -178,7 +203,7 @@ def _measure_set(controller_set: ControllerSet) -> SetFigures:
     for scale in (1.0, THESIS_ALPHA_GAIN_SCALE):
         tracks[scale] = foot_cycle_tracks(scale, controller_set.robot)
         walking[scale] = foot_cycle_figures_of(*tracks[scale], scale)
-    return SetFigures(rig, joints, walking, tracks)
+    return SetFigures(rig, joints, walking, tracks, _walk(controller_set.robot))
 
 
 def measure_comparison(cost_repeats: int = 15,

@@ -21,7 +21,12 @@ from pneumaquad.reporting.plotting import DPI, plt
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import simulate_rigs
 from pneumaquad.validation.calibration import THESIS_ALPHA_GAIN_SCALE
-from pneumaquad.validation.comparison import CONTROLLER_SETS, Comparison, targets_of
+from pneumaquad.validation.comparison import (
+    CONTROLLER_SETS,
+    WALK_DISTANCE,
+    Comparison,
+    targets_of,
+)
 from pneumaquad.validation.published import PUBLISHED
 from pneumaquad.validation.rig_loop import SINE_AMPLITUDE, SINE_MEAN, STEP_DWELL, STEP_LEVELS
 
@@ -111,6 +116,32 @@ def _alpha_finding(comparison: Comparison) -> str:
     return " ".join(sentences)
 
 
+def _walk_section(comparison: Comparison) -> list[str]:
+    lines = ["| controller set | outcome | travelled [m] | air [NL/m] | joints at a limit |",
+             "|---|---|---|---|---|"]
+    for controller_set in CONTROLLER_SETS:
+        walk = comparison.sets[controller_set.label].walk
+        outcome = "success" if walk.get("success") else (
+            "failure (" + "; ".join(walk.get("reasons", [])) + ")")
+        limits = ", ".join(walk.get("joints at a limit", [])) or "none"
+        lines.append(f"| {controller_set.label} | {outcome} | "
+                     f"{walk.get('distance travelled [m]', math.nan):.3f} | "
+                     f"{walk.get('air per metre [NL/m]', math.nan):.2f} | {limits} |")
+    return lines
+
+
+def _default_verdict(comparison: Comparison) -> str:
+    tuned, thesis = (comparison.sets[c.label].walk.get("success", False)
+                     for c in CONTROLLER_SETS)
+    if tuned and not thesis:
+        return ("Our tuning stays the default: it walks and the thesis set does not. The "
+                "thesis set's slower joints and alpha's limit cycle at full gain are what "
+                "the thesis's figures ask of a controller, not what walking needs.")
+    if thesis and not tuned:
+        return "The thesis set walks where our tuning does not."
+    return "Both sets have the same walking outcome; our tuning stays the default."
+
+
 def _component_section(comparison: Comparison) -> list[str]:
     complete = comparison.cost_table.rows[0].min_us
     lines = ["| component -> replacement | ns per call | replacement ns | calls per 1 ms step "
@@ -194,6 +225,15 @@ def comparison_markdown(comparison: Comparison) -> str:
         "removed at the two gains.",
         "",
         f"![Alpha in the walking motion at full and 75 % gain]({WALKING_FIGURE})",
+        "",
+        f"## Which set walks: the default walk of {WALK_DISTANCE:g} m",
+        "",
+        "`pneumaquad robot walk --distance 0.5` on flat ground with each set (the stand-up, "
+        "the stance check and the crawl as shipped):",
+        "",
+        *_walk_section(comparison),
+        "",
+        _default_verdict(comparison),
         "",
         "## Table 3: what each component costs (5.5.3)",
         "",
