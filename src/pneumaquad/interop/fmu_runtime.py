@@ -114,20 +114,20 @@ def guard_entry_points(slave_class: type) -> type:
 
 
 def release_at_exit(resources: Path, model_identifier: str) -> None:
-    """In a Python host, have the FMU's binary drop its interpreter state before the
-    process exits (Linux).
+    """Have the FMU's binary drop its interpreter state early in the process's exit
+    (Linux).
 
     The binary is never unloaded once used (it defines GNU unique symbols), so its own
-    clean-up runs at process exit, after its static state has been destroyed, and writes
-    to freed memory: the process aborted at exit in about one FMPy run in ten
-    ("corrupted double-linked list"; valgrind shows the access in
-    ``finalizePythonInterpreter``). Calling that exported function from an ``atexit``
-    handler, while the state is still alive, leaves nothing for the late clean-up to free.
-
-    Only where Python is the host: the FMU's code then runs on the interpreter's main
-    thread. In another tool pythonfmu starts the interpreter on a thread of its own and
-    finishes it in that same function, so it is not called from here. Nothing is done where
-    the binary is not found (an FMU being built).
+    clean-up runs at process exit, after the static object that holds its interpreter
+    state has been destroyed, and writes to freed memory: the process aborted at exit
+    ("corrupted double-linked list", "free(): corrupted unsorted chunks") in about one
+    FMPy run in ten, and in a C host without Python; valgrind shows the access in the
+    binary's ``finalizePythonInterpreter``. That exported function, registered here as an
+    exit handler (``__cxa_atexit``, which runs handlers in reverse order of registration),
+    runs before that static object is destroyed: it releases the state (in a host without
+    Python, pythonfmu then finishes the interpreter it started) and leaves nothing for the
+    late clean-up to free. Nothing is done where the binary is not found (an FMU being
+    built) or on other systems.
 
     Parameters
     ----------
@@ -136,20 +136,16 @@ def release_at_exit(resources: Path, model_identifier: str) -> None:
     model_identifier : str
         The FMU's model identifier (its binary's name).
     """
-    import threading
-
     binary = resources.parent / "binaries" / "linux64" / f"{model_identifier}.so"
-    if (not sys.platform.startswith("linux") or binary in _RELEASED_AT_EXIT
-            or threading.current_thread() is not threading.main_thread()
-            or not binary.is_file()):
+    if not sys.platform.startswith("linux") or binary in _RELEASED_AT_EXIT \
+            or not binary.is_file():
         return
-    import atexit
-
     library = ctypes.CDLL(str(binary))  # loaded by the host already: the same library
     finalize = getattr(library, "finalizePythonInterpreter", None)
     if finalize is None:
         return
-    finalize.restype = None
-    finalize.argtypes = []
-    atexit.register(finalize)
+    register = ctypes.CDLL(None).__cxa_atexit
+    register.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+    register.restype = ctypes.c_int
+    register(ctypes.cast(finalize, ctypes.c_void_p), None, None)
     _RELEASED_AT_EXIT.add(binary)

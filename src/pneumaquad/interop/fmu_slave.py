@@ -84,6 +84,11 @@ _SETTING_TYPES = {
 
 _VARIABLE_TYPES = {"real": Real, "integer": Integer, "string": String}
 
+#: Outputs read from the state record, from the kernel's output record, and the mean flows.
+_STATE_OUTPUTS = ("cap_pressure", "rod_pressure", "air_consumed")
+_KERNEL_OUTPUTS = ("pneumatic_force", "friction_force", "cap_temperature", "rod_temperature")
+_MEAN_FLOWS = ("cap_mass_flow", "rod_mass_flow", "supply_mass_flow")
+
 
 class FixedParameterError(RuntimeError):
     """A parameter was set after initialisation (FMI variability ``fixed``)."""
@@ -107,8 +112,6 @@ class ActuatorSlave(Fmi2Slave):
         Input [m].
     piston_velocity : float
         Input [m/s].
-    reported : dict of str to float
-        The outputs (:data:`~pneumaquad.interop.fmu_model.OUTPUTS`) [SI].
     """
 
     def __init__(self, **kwargs: Any) -> None:
@@ -139,7 +142,6 @@ class ActuatorSlave(Fmi2Slave):
         self.valve_voltage = self._exported.valve.offset_voltage
         self.piston_position = self.settings.initial_position
         self.piston_velocity = 0.0
-        self.reported: dict[str, float] = {}
         self._initialised = False
         self._register_variables()
         self._set_up()
@@ -163,7 +165,7 @@ class ActuatorSlave(Fmi2Slave):
             self.register_variable(Real(
                 variable.name, causality=Fmi2Causality.output,
                 variability=Fmi2Variability.continuous, description=variable.description,
-                getter=lambda name=variable.name: self.reported[name]), nested=False)
+                getter=lambda name=variable.name: self._read_output(name)), nested=False)
         for variable in (*self._parameters, *SETTING_VARIABLES):
             self.register_variable(_VARIABLE_TYPES[variable.kind](
                 variable.name, causality=Fmi2Causality.parameter,
@@ -208,44 +210,70 @@ class ActuatorSlave(Fmi2Slave):
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         """Advance the actuator from ``current_time`` by ``step_size`` [s] with the inputs
-        held; False (FMI discard, the outputs those of the last good step) when an input or
-        the state is not finite or the step is negative."""
-        inputs = (self.valve_voltage, self.piston_position, self.piston_velocity)
-        if not all(math.isfinite(value) for value in inputs) or not step_size >= 0.0:
+        held. False (FMI discard) for an input that is not finite or a negative step (the
+        state is left as it was), or when the state has become non-finite (the kernel step
+        was too long for the chambers; the FMU cannot go on)."""
+        voltage, position, velocity = self.valve_voltage, self.piston_position, \
+            self.piston_velocity
+        if not (math.isfinite(voltage + position + velocity) and step_size >= 0.0):
             self.log(f"at t = {current_time:g} s: step {step_size!r} s with inputs "
-                     f"valve_voltage={inputs[0]!r}, piston_position={inputs[1]!r}, "
-                     f"piston_velocity={inputs[2]!r}; expected finite inputs and a step "
+                     f"valve_voltage={voltage!r}, piston_position={position!r}, "
+                     f"piston_velocity={velocity!r}; expected finite inputs and a step "
                      "of at least 0 s", Fmi2Status.error)
             return False
         if step_size == 0.0:
             return True
         count = max(1, math.ceil(step_size / self._control_step - STEP_SLACK))
         kernel_step = step_size / count
-        stroke = self._params[0]["stroke"]
-        self._commands[0] = self.valve_voltage
-        position = self.piston_position
-        flows = np.zeros(3)
+        stroke = self._stroke
+        state, out = self._state_record, self._output_record
+        self._commands[0] = voltage
+        cap_flow = rod_flow = supply_flow = 0.0
         for _ in range(count):
             position = min(max(position, 0.0), stroke)
-            velocity = self.piston_velocity
-            if (position <= 0.0 and velocity < 0.0) or (position >= stroke and velocity > 0.0):
-                velocity = 0.0  # on an end stop, pushed into it: the piston does not move
+            moving = velocity
+            if (position <= 0.0 and moving < 0.0) or (position >= stroke and moving > 0.0):
+                moving = 0.0  # on an end stop, pushed into it: the piston does not move
             self._positions[0] = position
-            self._velocities[0] = velocity
+            self._velocities[0] = moving
             step_actuators(self._params, self._state, self._commands, self._positions,
                            self._velocities, kernel_step, self._substeps, self._supply,
                            self._outputs)
-            out = self._outputs[0]
-            flows += (out["cap_mass_flow"], out["rod_mass_flow"], out["supply_mass_flow"])
-            position = self._state[0]["position"]
-        state = self._state[0]
-        if not all(math.isfinite(state[name]) for name in ACTUATOR_STATE_DTYPE.names):
+            cap_flow += float(out["cap_mass_flow"])
+            rod_flow += float(out["rod_mass_flow"])
+            supply_flow += float(out["supply_mass_flow"])
+            position = state["position"]
+        self._mean_flows = (cap_flow / count, rod_flow / count, supply_flow / count)
+        if not math.isfinite(state["cap_pressure"] + state["rod_pressure"] + state["cap_mass"]
+                             + state["rod_mass"]):
             self.log(f"the actuator's state is not finite at t = {current_time + step_size:g}"
                      " s (a kernel step too long for the chambers: lower "
                      "simulation.control_step or raise simulation.substeps)", Fmi2Status.error)
             return False
-        self._report(flows / count)
         return True
+
+    def output_values(self) -> dict[str, float]:
+        """The outputs now (:data:`~pneumaquad.interop.fmu_model.OUTPUTS`), name -> SI
+        value."""
+        return {variable.name: self._read_output(variable.name) for variable in OUTPUTS}
+
+    def _read_output(self, name: str) -> float:
+        """One output [SI]: the state and kernel outputs at the end of the last step, the
+        flows averaged over it."""
+        state, out = self._state_record, self._output_record
+        if name == "piston_force":
+            return float(out["pneumatic_force"] - out["friction_force"])
+        if name in _STATE_OUTPUTS:
+            return float(state[name])
+        if name in _KERNEL_OUTPUTS:
+            return float(out[name])
+        if name in _MEAN_FLOWS:
+            return self._mean_flows[_MEAN_FLOWS.index(name)]
+        if name == "available_supply_pressure":
+            if self._supply_pressure is not None:
+                return self._supply_pressure
+            return float(supply_pressure_now(self._params[0], self._supply[0]))
+        raise KeyError(f"{name} is not an output of the actuator FMU")
 
     # --- the actuator --------------------------------------------------------------------
     def _set_up(self) -> None:
@@ -271,10 +299,15 @@ class ActuatorSlave(Fmi2Slave):
         self._commands = np.array([self.valve_voltage], dtype=np.float64)
         self._positions = np.array([position], dtype=np.float64)
         self._velocities = np.array([self.piston_velocity], dtype=np.float64)
-        state_outputs(self._params[0], self._state[0], position, self._outputs[0])
-        self._outputs[0]["friction_force"] = friction_of(self._params[0], self.piston_velocity,
-                                                         self._state[0]["bristle_deflection"])
-        self._report(np.zeros(3))
+        self._stroke = stroke
+        self._state_record, self._output_record = self._state[0], self._outputs[0]
+        state_outputs(self._params[0], self._state_record, position, self._output_record)
+        self._output_record["friction_force"] = friction_of(
+            self._params[0], self.piston_velocity, self._state_record["bristle_deflection"])
+        self._mean_flows = (0.0, 0.0, 0.0)
+        # an ideal supply delivers its set point throughout; a tank's is read each time
+        self._supply_pressure = (actuator.supply.supply_pressure
+                                 if actuator.supply.model == "ideal" else None)
 
     def _load_kernel(self) -> None:
         """Have numba load (or compile) the kernel now, with one step on copies of the
@@ -297,26 +330,6 @@ class ActuatorSlave(Fmi2Slave):
             message = error.errors()[0]["msg"].removeprefix("Value error, ")
             raise ParameterError([Problem(name, value, message)],
                                  source="FMU parameters") from None
-
-    def _report(self, mean_flows: np.ndarray) -> None:
-        """Fill :attr:`reported` from the state and the last kernel outputs."""
-        state, out = self._state[0], self._outputs[0]
-        pneumatic, friction = float(out["pneumatic_force"]), float(out["friction_force"])
-        self.reported = {
-            "piston_force": pneumatic - friction,
-            "pneumatic_force": pneumatic,
-            "friction_force": friction,
-            "cap_pressure": float(state["cap_pressure"]),
-            "rod_pressure": float(state["rod_pressure"]),
-            "cap_temperature": float(out["cap_temperature"]),
-            "rod_temperature": float(out["rod_temperature"]),
-            "cap_mass_flow": float(mean_flows[0]),
-            "rod_mass_flow": float(mean_flows[1]),
-            "supply_mass_flow": float(mean_flows[2]),
-            "air_consumed": float(state["air_consumed"]),
-            "available_supply_pressure": float(supply_pressure_now(self._params[0],
-                                                                   self._supply[0])),
-        }
 
     def _warn_on_other_version(self) -> None:
         """Log a warning when the installed pneumaquad is not the exporting one."""
