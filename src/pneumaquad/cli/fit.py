@@ -1,4 +1,4 @@
-"""Command line for parameter identification: ``pneumaquad fit friction|valve``.
+"""Command line for parameter identification: ``pneumaquad fit friction|valve|controller``.
 
 A thin layer over `pneumaquad.identification`. Inputs are rig run folders (or their
 ``recording.parquet``/``recording.csv``) or measured CSV/MAT files with a column mapping
@@ -7,6 +7,7 @@ User errors (bad files, mappings, parameters, unusable data) end with a message 
 status 2, without a traceback. A fit that ran but whose own checks say it failed (a
 parameter the data do not determine, large residuals) ends with a message naming the fit
 and the parameter and exit status 1, and nothing is written unless ``--force``.
+``fit controller`` is in `pneumaquad.cli.fit_controller`.
 """
 
 from __future__ import annotations
@@ -56,7 +57,8 @@ COMMAND_THRESHOLD = 0.05
 FIT_FAILED_STATUS = 1
 
 fit_app = command_group(
-    help="Identify friction and valve parameters from recordings (thesis 4.2.2-4.2.3).",
+    help="Identify friction and valve parameters (thesis 4.2.2-4.2.3) and the controller "
+    "from recordings.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=False,
@@ -428,3 +430,13 @@ def fit_valve(
             params, updates, output, fits=fits, overrides=overrides or []
         )
     console.print(f"parameters: [bold]{written}[/bold]")
+
+
+def _register_controller_command() -> None:
+    """``fit controller`` lives in its own module, which uses this one's helpers."""
+    from pneumaquad.cli.fit_controller import fit_controller_command
+
+    fit_app.command("controller")(fit_controller_command)
+
+
+_register_controller_command()

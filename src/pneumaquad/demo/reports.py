@@ -2,8 +2,10 @@
 
 * The closed-loop step train of the rig is compared with a stand-in for lab data: the same
   experiment simulated with LuGre friction instead of Stribeck-tanh, 20 µm position noise,
-  0.3 kPa pressure noise and a 20 ms delay, written as a lab-style CSV (ms, in, psig) with a
-  column mapping, and imported back through :mod:`pneumaquad.io.measured`.
+  0.3 kPa pressure noise and a 20 ms delay, written as a lab-style CSV (ms, in, psig, with
+  the valve command and the reference position, the input of ``pneumaquad fit
+  controller``) with a column mapping, and imported back through
+  :mod:`pneumaquad.io.measured`.
 * Stand-in lab data for identification (`write_identification_lab_data`): a fixed-piston
   sweep and open-loop steps of ``thesis-rig`` in the same lab format with a command column,
   the input of the README's ``pneumaquad fit`` example.
@@ -58,6 +60,7 @@ def write_lab_style_csv(
     atmosphere: float = 101325.0,
     with_command: bool = False,
     mapping_name: str | None = None,
+    with_reference: bool = False,
 ) -> tuple[Path, Path]:
     """Write a rig recording as a lab CSV (ms, in, psig) and its column-mapping TOML.
 
@@ -82,6 +85,9 @@ def write_lab_style_csv(
     mapping_name : str, optional
         Stem of the mapping file; ``<name>-mapping`` by default. Files of the same
         columns can share one.
+    with_reference : bool
+        Also write the reference position of a closed-loop run (column ``r_in``, inches,
+        no noise) and map it.
     """
     generator = np.random.default_rng(seed)
     time = recording["time [s]"] + delay
@@ -93,6 +99,9 @@ def write_lab_style_csv(
     if with_command:
         columns.append(recording["command [V]"])
         header += ",u_V"
+    if with_reference:
+        columns.append(recording["reference position [m]"] / INCH)
+        header += ",r_in"
     folder.mkdir(parents=True, exist_ok=True)
     csv = folder / f"{name}.csv"
     np.savetxt(csv, np.column_stack(columns), delimiter=",", header=header, comments="",
@@ -106,7 +115,9 @@ def write_lab_style_csv(
         'position = { source = "x_in", unit = "in" }\n'
         'cap_pressure = { source = "p_cap_psig", unit = "psig" }\n'
         'rod_pressure = { source = "p_rod_psig", unit = "psig" }\n'
-        + ('command = { source = "u_V", unit = "V" }\n' if with_command else ""),
+        + ('command = { source = "u_V", unit = "V" }\n' if with_command else "")
+        + ('reference_position = { source = "r_in", unit = "in" }\n' if with_reference
+           else ""),
         encoding="utf-8",
     )
     return csv, mapping
@@ -197,7 +208,8 @@ def _measured_comparison(folder: Path, report: Report) -> None:
     setup = load_rig("thesis-rig", ['friction.model="lugre"'])
     reference = signals.step_train(_STEP_LEVELS, 2.0, setup.simulation.control_step)
     lab = simulate_rig(setup, reference, closed_loop=True).recording
-    csv, mapping = write_lab_style_csv(lab, folder / "lab-data", delay=0.02)
+    csv, mapping = write_lab_style_csv(lab, folder / "lab-data", delay=0.02, with_command=True,
+                                       with_reference=True)
     page = build_run_report(folder / "step-train", measured=csv, mapping=mapping)
     figures: dict[str, Any] = {"report": str(page.relative_to(folder))}
     comparison = json.loads((page.parent / "comparison.json").read_text(encoding="utf-8"))

@@ -2,9 +2,10 @@
 
 Friction from open-loop steps (stiction peaks, Coulomb-viscous and Stribeck-tanh fits),
 the underlapped valve's input-pressure curves from fixed-piston tests, equivalent orifice
-areas fitted around the rig simulator and their polynomials, and parameter files written
-from the results. Pure functions over recordings (dicts of SI arrays keyed
-``"quantity [unit]"``, simulated or from `pneumaquad.io.measured`).
+areas fitted around the rig simulator and their polynomials, the PID controller from
+closed-loop recordings, and parameter files written from the results. Pure functions
+over recordings (dicts of SI arrays keyed ``"quantity [unit]"``, simulated or from
+`pneumaquad.io.measured`).
 
 Every fit returns the package's one result type, `pneumaquad.analysis.fits.FitResult`
 (re-exported here with `check_standard_errors`).
@@ -12,6 +13,8 @@ Every fit returns the package's one result type, `pneumaquad.analysis.fits.FitRe
 
 from pneumaquad.analysis.fits import FitResult, check_standard_errors
 
+from .controller import METHODS, fit_controller
+from .controller_data import ClosedLoopRecording, ControllerFit, closed_loop_recording
 from .friction import (
     STRIBECK_TANH_PARAMETERS,
     FrictionPoints,
@@ -47,8 +50,11 @@ from .valve import (
 )
 
 __all__ = [
+    "METHODS",
     "STRIBECK_TANH_PARAMETERS",
     "AreaPolynomials",
+    "ClosedLoopRecording",
+    "ControllerFit",
     "EquivalentAreaFit",
     "FilterSettings",
     "FitResult",
@@ -61,8 +67,10 @@ __all__ = [
     "area_polynomial_updates",
     "areas_table",
     "check_standard_errors",
+    "closed_loop_recording",
     "equivalent_area_for_step",
     "fit_area_polynomials",
+    "fit_controller",
     "fit_coulomb_viscous",
     "fit_input_pressure_curve",
     "fit_stribeck_tanh",
