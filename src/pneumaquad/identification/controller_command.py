@@ -389,11 +389,12 @@ def _estimate(regression: _Regression, lag: float, tau: float, with_filter: bool
 
 
 def _filter_determined(estimate: FitResult, period: float) -> bool:
-    """Whether the data pin τ_d: a finite standard error below a quarter of τ_d or of the
-    sample period, whichever is larger."""
+    """Whether the data pin τ_d: below the longest one searched, with a finite standard
+    error below a quarter of τ_d or of the sample period, whichever is larger."""
     tau = estimate.parameters[FILTER_KEY]
     error = estimate.standard_errors[FILTER_KEY]
-    return math.isfinite(error) and error <= 0.25 * max(tau, period)
+    return (tau < FILTER_GRID[-1] * (1.0 - 1e-6) and math.isfinite(error)
+            and error <= 0.25 * max(tau, period))
 
 
 def _filter_note(estimate: FitResult, held: float) -> str:
@@ -411,6 +412,9 @@ def _with_checks(estimate: FitResult) -> FitResult:
                        {k: estimate.standard_errors[k] for k in checked_keys},
                        estimate.r_squared, estimate.residual_rms, estimate.n_points)
     problems = list(check_standard_errors(subset).problems)
+    problems += [f"{estimate.name}: {key} = {estimate.parameters[key]:.4g} is negative: the "
+                 "controller has no such term, or it is not this PID"
+                 for key in GAIN_KEYS if estimate.parameters[key] < 0.0]
     if not estimate.r_squared >= MIN_R_SQUARED:
         problems.append(
             f"{estimate.name}: the PID explains {estimate.r_squared:.1%} of the command's "

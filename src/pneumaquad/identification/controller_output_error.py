@@ -387,7 +387,8 @@ def fit_pid_output_error(
     covariance = covariance_from_jacobian(jacobian, residual)
     if tau is None:
         value, error = math.exp(x[3]), math.exp(x[3]) * math.sqrt(abs(covariance[3, 3]))
-        if not (math.isfinite(error) and error <= 0.25 * max(value, control_step)):
+        inside = LOWER[3] * (1.0 + 1e-6) < value < UPPER[3] * (1.0 - 1e-6)
+        if not (inside and math.isfinite(error) and error <= 0.25 * max(value, control_step)):
             notes.append(
                 f"the data do not determine the derivative filter (τ_d = {value * 1e3:.3g} ± "
                 f"{error * 1e3:.2g} ms): held at the parameter set's {tau_held * 1e3:.3g} ms")
