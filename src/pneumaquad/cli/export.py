@@ -8,7 +8,6 @@ from typing import Annotated
 import typer
 
 from pneumaquad.cli.common import (
-    OverwriteOption,
     ParamsOption,
     SetOption,
     command_group,
@@ -36,7 +35,8 @@ def export_fmu_command(
     output: Annotated[Path | None, typer.Option(
         "--output", "-o", help="FMU file to write (default: <set name>.fmu here); an "
         "existing folder: the FMU goes into it.")] = None,
-    overwrite: OverwriteOption = False,
+    overwrite: Annotated[bool, typer.Option(
+        "--overwrite", help="Replace the --output file if it exists.")] = False,
 ) -> None:
     """Export one actuator (valve, cylinder, friction, supply) as an FMI 2.0 co-simulation
     FMU: inputs valve voltage [V], piston position [m] and velocity [m/s]; outputs force [N],

@@ -1,7 +1,7 @@
 """Export one actuator as an FMI 2.0 co-simulation FMU (``pneumaquad export fmu``,
 docs/fmu.md).
 
-The FMU is built with pythonfmu. Its ``resources`` folder holds a two-line Python module
+The FMU is built with pythonfmu. Its ``resources`` folder holds a short Python module
 whose class extends :class:`pneumaquad.interop.fmu_slave.ActuatorSlave`, the resolved
 parameter set and the FMU's settings (:mod:`pneumaquad.interop.fmu_model`); its binaries
 (Linux and Windows, 64 bit) are pythonfmu's, which run that module in the Python the
@@ -74,10 +74,12 @@ class PneumaquadActuator(ActuatorSlave):
 '''
 
 
-def model_identifier(set_name: str) -> str:
-    """The FMU's model name and identifier for a parameter set: ``"crr-gamma"`` ->
-    ``"pneumaquad_crr_gamma"`` (a C identifier, as FMI requires)."""
-    return "pneumaquad_" + re.sub(r"\W", "_", set_name, flags=re.ASCII)
+def model_identifier(parameter_set: str | os.PathLike[str]) -> str:
+    """The FMU's model name and identifier for a parameter set, from its name or its
+    file's name: ``"crr-gamma"`` -> ``"pneumaquad_crr_gamma"``, ``"runs/my-gamma.toml"``
+    -> ``"pneumaquad_my_gamma"`` (a C identifier, as FMI requires)."""
+    name = Path(parameter_set).stem
+    return "pneumaquad_" + re.sub(r"\W", "_", name, flags=re.ASCII)
 
 
 def export_settings(
@@ -125,7 +127,7 @@ def export_settings(
                                       "of the actuator sets it names (crr-alpha, crr-beta, "
                                       "crr-gamma) or a rig file")])
     settings = FmuSettings(
-        model_name=model_identifier(actuator.meta.name),
+        model_name=model_identifier(parameter_set),
         parameter_set=str(parameter_set),
         pneumaquad_version=__version__,
         control_step=control_step,

@@ -41,6 +41,7 @@ __all__ = [
     "OUTPUTS",
     "PARAMETERS_FILE",
     "SETTINGS_FILE",
+    "SETTING_FIELDS",
     "SETTING_VARIABLES",
     "FmuSettings",
     "FmuVariable",

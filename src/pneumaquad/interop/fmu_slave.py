@@ -6,8 +6,8 @@ side gives the piston's position and velocity and the valve voltage, the FMU ret
 force, the chamber states, the flows and the air used. Its variables are those of
 :mod:`pneumaquad.interop.fmu_model`; the start values of its parameters come from the
 parameter set and settings in the FMU's ``resources`` folder. An exported FMU
-(:func:`pneumaquad.interop.fmu_export.export_fmu`) holds a two-line subclass of it, so the
-code that runs is the installed pneumaquad's.
+(:func:`pneumaquad.interop.fmu_export.export_fmu`) holds a subclass of it that adds nothing,
+so the code that runs is the installed pneumaquad's.
 
 Life cycle (FMI 2.0 co-simulation):
 
