@@ -387,6 +387,20 @@ def test_export_command_refuses_bad_input(arguments: list[str], expected: str, t
     assert not list(tmp_path.iterdir())
 
 
+def test_export_command_without_pythonfmu_says_what_to_install(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setitem(sys.modules, "pythonfmu", None)  # as if not installed
+    monkeypatch.setattr(sys, "argv", ["pneumaquad", "export", "fmu", "--params", SET])
+    with pytest.raises(SystemExit) as ended:
+        main()
+    message = capsys.readouterr().err
+    assert ended.value.code == 2
+    assert "pip install 'pneumaquad[fmu]'" in message
+    assert not list(tmp_path.iterdir())
+
+
 def test_the_documented_example_runs(fmu_file: Path, tmp_path: Path,
                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """docs/fmu.md's FMPy loop, run on a copy of the exported FMU."""

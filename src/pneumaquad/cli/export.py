@@ -48,14 +48,13 @@ def export_fmu_command(
         raise typer.BadParameter(f"{target} exists; pass --overwrite to replace it, or choose "
                                  "another file", param_hint="--output")
     try:
-        from pneumaquad.interop.fmu_export import export_fmu
-        from pneumaquad.interop.fmu_model import INPUTS, OUTPUTS
-    except ModuleNotFoundError as error:
-        if error.name != "pythonfmu":
-            raise
+        import pythonfmu  # noqa: F401  (builds the FMU: an optional dependency)
+    except ModuleNotFoundError:
         stderr_console.print("error: exporting an FMU needs pythonfmu: pip install "
                              "'pneumaquad\\[fmu]'", highlight=False)
         raise typer.Exit(2) from None
+    from pneumaquad.interop.fmu_export import export_fmu
+    from pneumaquad.interop.fmu_model import INPUTS, OUTPUTS
 
     written = export_fmu(params, target, overrides or [])
     model_name, parameters = described_model(written)
