@@ -264,7 +264,7 @@ def fit_pid_from_command(
     max_delay: float = 0.05,
     fit_offset: bool = False,
 ) -> ControllerFit:
-    """Identify the PID from recordings with the valve command (the direct method).
+    """Identify the PID from recordings with the valve command (the command method).
 
     Parameters
     ----------
@@ -296,7 +296,7 @@ def fit_pid_from_command(
         unknowns.
     """
     if any(r.command is None for r in recordings):
-        raise IdentificationError("the direct method needs the valve command (column "
+        raise IdentificationError("the command method needs the valve command (column "
                                   "'command [V]') in every recording")
     period = recordings[0].period
     if any(abs(r.period - period) > 1e-3 * period for r in recordings):
@@ -375,12 +375,11 @@ def _estimate(regression: _Regression, lag: float, tau: float, with_filter: bool
         values.append(tau)
     covariance = covariance_from_jacobian(jacobian, residual)
     errors = np.sqrt(np.abs(np.diag(covariance)))
-    offset = regression.offset if not regression.fit_offset else 0.0
     return FitResult(
         name="PID from the valve command",
         parameters={key: float(value) for key, value in zip(keys, values, strict=True)},
         standard_errors={key: float(error) for key, error in zip(keys, errors, strict=True)},
-        r_squared=r_squared(residual, regression.target + offset),
+        r_squared=r_squared(residual, regression.target),
         residual_rms=float(np.sqrt(np.mean(residual**2))),
         n_points=int(residual.size),
         residual_unit="V",

@@ -241,11 +241,6 @@ def delay_from_lag(lag: float, control_step: float) -> float:
     return steps * control_step
 
 
-def relative_standard_error(value: float, error: float) -> float:
-    """Standard error as a share of the value [-] (inf for a zero value)."""
-    return error / abs(value) if value != 0.0 else math.inf
-
-
 def position_noise(recordings: Sequence[ClosedLoopRecording]) -> float:
     """Standard deviation of white noise on the recorded positions [m], estimated from
     their second differences: 1.4826 · median |Δ²y - median Δ²y| / √6 (the median

@@ -352,25 +352,12 @@ def fit_pid_output_error(
         raise IdentificationError(f"start {start!r}: expected one of {', '.join(START_STATES)}")
     control_step = setup.simulation.control_step
     tau_held = setup.controller.derivative_filter_time_constant
-    if delay is None:
-        delays = list(range(round(max_delay / control_step) + 1))
-        current = round(setup.controller.measurement_delay / control_step)
-    else:
-        delays = [round(delay / control_step)]
-        current = delays[0]
-    searches = []
-    for state in (("parameters", "recording") if start == "auto" else (start,)):
-        model = _LoopModel(recordings, setup, state)
-        model.set_horizon(HORIZONS[0])
-        if len(delays) > 1:
-            best, fits = _search_delay(model, setup, tau_held, delays, say)
-        else:
-            x, _, _ = _fit_gains(model, _start(model, setup, tau_held, current)[0], tau_held,
-                                 current, final=False)
-            residual = model.residuals([_candidate(x, tau_held, current)])[0]
-            best, fits = current, {current: (float(residual @ residual), x)}
-        searches.append((fits[best][0], best, fits, model))
-    _, current, fits, model = min(searches, key=lambda item: item[0])
+    delays = (list(range(round(max_delay / control_step) + 1)) if delay is None
+              else [round(delay / control_step)])
+    states = ("parameters", "recording") if start == "auto" else (start,)
+    searches = [_first_horizon(_LoopModel(recordings, setup, state), setup, tau_held, delays,
+                               say) for state in states]
+    current, fits, model = min(searches, key=lambda item: item[1][item[0]][0])
     x = fits[current][1]
     say(f"start: the {model.start} state, delay {current * control_step * 1e3:g} ms")
     for share in HORIZONS[1:]:
@@ -396,16 +383,9 @@ def fit_pid_output_error(
             x, residual, jacobian = _fit_gains(model, x[:3], tau, current)
             covariance = covariance_from_jacobian(jacobian, residual)
     fit = _result(x, residual, covariance, model, tau is None)
-    noise = position_noise(recordings)
-    if fit.residual_rms > NOISE_RATIO * noise + 1e-6:
-        notes.append(
-            f"the residual RMS {fit.residual_rms * 1e6:.3g} um is {fit.residual_rms / noise:.3g} "
-            f"times the position noise estimated from the recording ({noise * 1e6:.3g} um): "
-            "the parameter set's rig does not follow the recording as closely as its noise "
-            "allows, and the gains make up for the difference of the plants (check its "
-            "friction and valve against the rig's)" if noise > 0.0 else
-            f"the residual RMS is {fit.residual_rms * 1e6:.3g} um on a noise-free recording: "
-            "the parameter set's rig does not follow it exactly")
+    plant = _plant_note(fit, recordings)
+    if plant:
+        notes.append(plant)
     if not math.isclose(recordings[0].period, control_step, rel_tol=1e-3):
         notes.append(
             f"the recording's sample period {recordings[0].period * 1e3:.4g} ms differs from "
@@ -420,7 +400,37 @@ def fit_pid_output_error(
         details={f"residual per delay, first {HORIZONS[0]:.0%} [m^2]": {
                      f"{d * control_step * 1e3:g} ms": c for d, (c, _) in sorted(fits.items())},
                  "start": model.start,
-                 "simulations": sum(item[3].simulations for item in searches)})
+                 "simulations": sum(item[2].simulations for item in searches)})
+
+
+def _first_horizon(model: _LoopModel, setup: RigSetup, tau: float, delays: Sequence[int],
+                   say: Progress) -> tuple[int, DelayFits, _LoopModel]:
+    """The best delay and the gains fitted at each delay tried, on the first horizon."""
+    model.set_horizon(HORIZONS[0])
+    if len(delays) > 1:
+        best, fits = _search_delay(model, setup, tau, delays, say)
+        return best, fits, model
+    delay = delays[0]
+    x, residual, _ = _fit_gains(model, _start(model, setup, tau, delay)[0], tau, delay,
+                                final=False)
+    return delay, {delay: (float(residual @ residual), x)}, model
+
+
+def _plant_note(fit: FitResult, recordings: Sequence[ClosedLoopRecording]) -> str:
+    """A sentence when the residual is more than `NOISE_RATIO` times the recording's
+    position noise (`position_noise`): the plant does not follow the recording; else
+    empty."""
+    noise = position_noise(recordings)
+    if fit.residual_rms <= NOISE_RATIO * noise + 1e-6:
+        return ""
+    if noise == 0.0:
+        return (f"the residual RMS is {fit.residual_rms * 1e6:.3g} um on a noise-free "
+                "recording: the parameter set's rig does not follow it exactly")
+    return (f"the residual RMS {fit.residual_rms * 1e6:.3g} um is "
+            f"{fit.residual_rms / noise:.3g} times the position noise estimated from the "
+            f"recording ({noise * 1e6:.3g} um): the parameter set's rig does not follow the "
+            "recording as closely as its noise allows, and the gains make up for the "
+            "difference of the plants (check its friction and valve against the rig's)")
 
 
 def _confirm_delay(model: _LoopModel, x: np.ndarray, tau: float, delay: int,
