@@ -54,7 +54,8 @@ def _rejects(overrides: list[str], *fragments: str, name: str = "thesis-rig") ->
 
 def test_list_parameter_sets() -> None:
     sets = list_parameter_sets()
-    assert sorted(sets) == sorted([*SHIPPED, "crr-quadruped"])
+    assert sorted(sets) == sorted([*SHIPPED, "crr-quadruped", "crr-quadruped-thesis-pid",
+                                   "thesis-rig-thesis-pid"])
     assert all(isinstance(d, str) and d for d in sets.values())
 
 
