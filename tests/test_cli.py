@@ -363,12 +363,15 @@ def test_an_output_folder_with_files_needs_overwrite(tmp_path):
 
 def test_the_command_line_loads_no_simulator_to_show_its_help():
     """``pneumaquad --help`` builds every command's options without importing MuJoCo, the
-    robot's simulation or Matplotlib (benchmarks/cli_startup.py times it)."""
+    robot's simulation, Matplotlib, scipy.signal (the controller fit) or the thesis
+    validation (benchmarks/cli_startup.py times it)."""
     import sys
 
     code = ("import sys, pneumaquad.cli.main; "
             "print(sorted(m for m in ('mujoco', 'matplotlib', "
-            "'pneumaquad.robot.simulation', 'pneumaquad.locomotion.walking') "
+            "'pneumaquad.robot.simulation', 'pneumaquad.locomotion.walking', "
+            "'scipy.signal', 'pneumaquad.validation.comparison', "
+            "'pneumaquad.identification.controller') "
             "if m in sys.modules))")
     loaded = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
                             text=True).stdout.strip()

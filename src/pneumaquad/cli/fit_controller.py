@@ -25,9 +25,7 @@ from pneumaquad.cli.fit import (
     show_fit,
     user_errors,
 )
-from pneumaquad.identification.controller import METHODS, fit_controller
-from pneumaquad.identification.controller_data import ControllerFit
-from pneumaquad.identification.controller_output_error import START_STATES
+from pneumaquad.identification.controller_data import METHODS, START_STATES, ControllerFit
 from pneumaquad.identification.report import write_parameter_file
 from pneumaquad.io.measured import load_mapping
 from pneumaquad.params import ParameterError, load_rig, parse_quantity
@@ -129,6 +127,8 @@ def fit_controller_command(
 
         def progress(line: str) -> None:
             stderr_console.print(f"  {line}", style="dim", highlight=False)
+
+        from pneumaquad.identification.controller import fit_controller
 
         fit = fit_controller(
             data, setup, method=chosen, fit_filter=fit_filter, delay=assumed,

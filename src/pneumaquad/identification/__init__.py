@@ -13,8 +13,6 @@ Every fit returns the package's one result type, `pneumaquad.analysis.fits.FitRe
 
 from pneumaquad.analysis.fits import FitResult, check_standard_errors
 
-from .controller import METHODS, fit_controller
-from .controller_data import ClosedLoopRecording, ControllerFit, closed_loop_recording
 from .friction import (
     STRIBECK_TANH_PARAMETERS,
     FrictionPoints,
@@ -86,3 +84,24 @@ __all__ = [
     "updates_from_fit",
     "write_parameter_file",
 ]
+
+#: The controller fit's names, imported on first use: it loads scipy.signal and the rig's
+#: compiled loop, which the command line's start (and ``--help``) does not need.
+_LAZY = {
+    "METHODS": "controller",
+    "fit_controller": "controller",
+    "ClosedLoopRecording": "controller_data",
+    "ControllerFit": "controller_data",
+    "closed_loop_recording": "controller_data",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+

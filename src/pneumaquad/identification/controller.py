@@ -22,14 +22,17 @@ import numpy as np
 from pneumaquad.params.schema import MAX_MEASUREMENT_DELAY, RigSetup
 
 from .controller_command import fit_pid_from_command
-from .controller_data import ClosedLoopRecording, ControllerFit, closed_loop_recording
-from .controller_output_error import START_STATES, Progress, fit_pid_output_error
+from .controller_data import (
+    METHODS,
+    START_STATES,
+    ClosedLoopRecording,
+    ControllerFit,
+    closed_loop_recording,
+)
+from .controller_output_error import Progress, fit_pid_output_error
 from .preprocess import IdentificationError
 
 __all__ = ["METHODS", "fit_controller"]
-
-#: The methods: chosen from the recordings, on the command, by output error.
-METHODS = ("auto", "command", "output-error")
 
 
 def fit_controller(

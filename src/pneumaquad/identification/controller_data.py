@@ -33,11 +33,20 @@ __all__ = [
     "COMMAND_COLUMN",
     "CONTROLLER_COLUMNS",
     "GAIN_KEYS",
+    "METHODS",
     "MIN_REFERENCE_RANGE",
+    "START_STATES",
     "ClosedLoopRecording",
     "ControllerFit",
     "closed_loop_recording",
 ]
+
+#: The methods: chosen from the recordings, on the command, by output error.
+METHODS = ("auto", "command", "output-error")
+#: Choices of the output-error simulation's start state: the parameter set's
+#: ``rig.initial_*`` state, at rest at the first recorded row, or whichever of the two fits
+#: the first horizon better with the start gains.
+START_STATES = ("auto", "parameters", "recording")
 
 #: Columns every controller fit needs.
 CONTROLLER_COLUMNS = ("time [s]", "reference position [m]", "position [m]")

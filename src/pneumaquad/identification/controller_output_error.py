@@ -50,6 +50,7 @@ from pneumaquad.rig.simulate import RigDivergedError, simulate_rigs
 from .controller_data import (
     FILTER_KEY,
     GAIN_KEYS,
+    START_STATES,
     ClosedLoopRecording,
     ControllerFit,
     position_noise,
@@ -68,10 +69,6 @@ LOWER = (1e-2, 1e-3, 1e-4, 1e-4)
 UPPER = (1e5, 1e7, 1e4, 0.1)
 #: Shares of each recording fitted in turn [-] (the start and delay search on the first).
 HORIZONS = (0.2, 0.4, 0.7, 1.0)
-#: Choices of the simulation's start state: the parameter set's ``rig.initial_*`` state,
-#: at rest at the first recorded row, or whichever of the two fits the first horizon
-#: better with the start gains.
-START_STATES = ("auto", "parameters", "recording")
 #: Residual RMS over the recording's position noise above which the fit says that the
 #: plant does not follow the recording [-].
 NOISE_RATIO = 3.0
