@@ -9,6 +9,7 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
+from pneumaquad.cli.common import name_placeholders
 from pneumaquad.cli.main import app
 
 GROUP = typer.main.get_command(app)
@@ -42,3 +43,21 @@ def test_bracketed_units_survive_in_the_help(path, command):
     text = " ".join(shown.output.split())
     for name, unit in bracketed:
         assert unit in text, f"{' '.join(path)} {name}: {unit} lost from the help"
+
+
+#: The command the entry point runs: placeholders named (pneumaquad.cli.main.main).
+NAMED = name_placeholders(typer.main.get_command(app))
+
+
+@pytest.mark.parametrize("path", [path for path, _ in _commands(NAMED)],
+                         ids=[" ".join(path) for path, _ in _commands(NAMED)])
+def test_help_placeholders_say_what_to_type(path, capsys):
+    """No Python type in the help (``<str>``, ``<list[Path]>``): options show SET,
+    KEY=VALUE, QUANTITY, NUMBER, PATH..., arguments their name in capitals."""
+    with pytest.raises(SystemExit) as ended:
+        NAMED.main(args=[*path, "--help"], prog_name="pneumaquad", standalone_mode=True)
+    assert ended.value.code == 0
+    text = capsys.readouterr().out
+    assert "Usage: pneumaquad" in text
+    python_types = re.findall(r"<(?:str|float|int|bool|path|Path|list\[[^\]]*\])>", text)
+    assert python_types == [], f"{' '.join(path)}: {python_types}"

@@ -65,6 +65,56 @@ def command_group(**options: Any) -> typer.Typer:
     return typer.Typer(rich_markup_mode=None, **options)
 
 
+#: Help placeholders of option values by parameter name (else by default or type).
+NAME_PLACEHOLDERS = {
+    "params": "SET", "overrides": "KEY=VALUE", "output": "PATH", "mapping": "FILE",
+    "measured": "FILE", "host": "ADDRESS",
+}
+#: Help placeholders of option values by the value's Python type.
+TYPE_PLACEHOLDERS = {"str": "TEXT", "float": "NUMBER", "int": "INTEGER", "Path": "PATH"}
+
+
+def name_placeholders(command: Any) -> Any:
+    """Give every option of ``command`` and its sub-commands a placeholder that says what
+    to type (``SET``, ``KEY=VALUE``, ``QUANTITY`` for a value with a unit, ``NUMBER``,
+    ``PATH``) where it has none, in place of the Python type typer shows (``<str>``,
+    ``<list[str]>``); arguments show their name in capitals and no type. ``command`` is
+    the command typer builds (``typer.main.get_command``); returns it."""
+    from typer.core import TyperArgument, TyperOption
+
+    commands = [command]
+    while commands:
+        current = commands.pop()
+        commands.extend(getattr(current, "commands", {}).values())
+        for parameter in current.params:
+            if isinstance(parameter, TyperArgument) and parameter.metavar is None:
+                # the argument's name in capitals, and no Python type beside it: its help
+                # says what it takes
+                parameter.metavar = (parameter.name or "").upper()
+                parameter.display_type_rich = _no_type
+            if isinstance(parameter, TyperOption) and not parameter.is_flag and (
+                    parameter.metavar is None):
+                value_type = parameter.bare_type().removeprefix("list[").removesuffix("]")
+                parameter.metavar = (NAME_PLACEHOLDERS.get(parameter.name or "")
+                                     or _quantity_placeholder(parameter.default)
+                                     or TYPE_PLACEHOLDERS.get(value_type))
+    return command
+
+
+def _no_type(ctx: Any) -> None:
+    """An argument's help row without the Python type typer adds (``<str>``)."""
+    del ctx
+
+
+def _quantity_placeholder(default: Any) -> str | None:
+    """QUANTITY for an option whose default is a number with a unit (``"5 s"``)."""
+    import re
+
+    if isinstance(default, str) and re.fullmatch(r"-?[\d.]+(e-?\d+)? \S+", default):
+        return "QUANTITY"
+    return None
+
+
 #: Results (figures, summaries, where files were written): standard output, so that
 #: ``> file`` keeps them.
 console = Console()

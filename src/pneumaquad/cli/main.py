@@ -26,6 +26,7 @@ from pneumaquad.cli.common import (
     command_group,
     console,
     finish_run,
+    name_placeholders,
     option_range,
     progress_bar,
     quantity,
@@ -474,7 +475,7 @@ _register_robot_commands()
 def main() -> None:
     """Entry point: run the app; user errors print a message and exit with status 2."""
     try:
-        app()
+        name_placeholders(typer.main.get_command(app))()
     except Exception as error:
         if not isinstance(error, user_errors()):
             raise
