@@ -21,7 +21,7 @@ from pneumaquad.params import load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH as INCH
 from pneumaquad.params.conversions import PASCAL_PER_PSI as PSI
 from pneumaquad.reporting.html import HtmlPage
-from pneumaquad.reporting.plotting import plot_comparison
+from pneumaquad.reporting.plotting import plot_comparison, plot_difference, plot_held_pressures
 from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import RigResult
@@ -156,6 +156,7 @@ def _open_loop_steps(folder: Path, report: DemoReport) -> None:
 def _spacer(folder: Path, report: DemoReport) -> None:
     figures: dict[str, Any] = {}
     recordings = {}
+    targets: dict[str, tuple[float, ...]] = {}
     setup = load_rig("thesis-rig")
     supply = setup.actuator.supply
     valve = setup.actuator.valve
@@ -172,6 +173,7 @@ def _spacer(folder: Path, report: DemoReport) -> None:
         )
         recording = result.recording
         centered = volts - valve.offset_voltage
+        levels = []
         for label, port, column in (
             ("cap", cap_port, "cap pressure [Pa]"),
             ("rod", rod_port, "rod pressure [Pa]"),
@@ -187,9 +189,12 @@ def _spacer(folder: Path, report: DemoReport) -> None:
             )
             figures[f"{volts} V {label}: settled [psia]"] = recording[column][-1] / PSI
             figures[f"{volts} V {label}: eq 4.2.7 curve [psia]"] = expected / PSI
+            levels.append(expected)
         recordings[f"{volts} V"] = recording
-    path = plot_comparison(
-        recordings, folder / "spacer.png", "Fixed piston inside the underlap band"
+        targets[f"{volts} V"] = tuple(levels)
+    path = plot_held_pressures(
+        recordings, targets, folder / "spacer.png",
+        "Fixed piston inside the underlap band: chamber pressures and their curves"
     )
     report.add(
         "Fixed piston (spacer)",
@@ -285,14 +290,18 @@ def _reference_solver(folder: Path, report: DemoReport) -> None:
         "rod pressure RMSE [psi]": _rms(fixed["rod pressure [Pa]"], radau["rod pressure [Pa]"])
         / PSI,
     }
-    path = plot_comparison(
-        recordings, folder / "solver.png", "Fixed step (1 ms, 10 substeps) vs Radau reference"
+    simulation = load_rig("thesis-rig").simulation
+    steps = f"{simulation.control_step * 1e3:g} ms, {simulation.substeps} substeps"
+    path = plot_difference(
+        fixed, radau, folder / "solver.png", ("fixed step", "Radau"),
+        f"Fixed step ({steps}) against the Radau reference",
     )
     report.add(
         "Fixed step vs adaptive reference",
-        "The default integrator (1 ms control "
-        "step, 10 Heun substeps, linearly implicit piston velocity) against scipy's "
-        "Radau with rtol 1e-6 on the same sampled controller.",
+        f"The default integrator ({simulation.control_step * 1e3:g} ms control step, "
+        f"{simulation.substeps} Heun substeps, linearly implicit piston velocity) against "
+        f"scipy's Radau with rtol {simulation.relative_tolerance:g} on the same sampled "
+        "controller; the lower panels show the differences.",
         path,
         figures,
     )

@@ -169,6 +169,63 @@ def plot_comparison(recordings: Mapping[str, Recording], path: Path, title: str 
     return _finish(fig, list(axes), path, title)
 
 
+def plot_difference(candidate: Recording, reference: Recording, path: Path,
+                    labels: tuple[str, str] = ("fixed step", "reference"),
+                    title: str = "") -> Path:
+    """Two runs of the same experiment that agree closely: the position of both, then the
+    candidate's difference from the reference in position (thousandths of an inch) and in
+    the cap and rod pressures (psi), which an overlay would hide.
+
+    Parameters
+    ----------
+    candidate, reference
+        Recordings on the same time grid (the candidate's times are used).
+    path
+        Output PNG path.
+    labels
+        Names of the candidate and of the reference.
+    title
+        Figure title.
+    """
+    time = _time(candidate)
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8), height_ratios=[3, 2, 2],
+                             layout="constrained")
+    ax_pos, ax_dx, ax_dp = axes
+    for label, recording, style in ((labels[1], reference, "-"), (labels[0], candidate, "--")):
+        ax_pos.plot(time, metres_to_inches(recording[POSITION]), ls=style, lw=1.5, label=label)
+    ax_pos.set_ylabel("Position (in)")
+    difference = metres_to_inches(candidate[POSITION] - reference[POSITION]) * 1e3
+    ax_dx.plot(time, difference, color="C0", lw=1.2)
+    ax_dx.set_ylabel("Position difference\n(0.001 in)")
+    for column, colour, name in ((CAP_PRESSURE, "C3", "cap"), (ROD_PRESSURE, "C2", "rod")):
+        ax_dp.plot(time, pascals_to_psi(candidate[column] - reference[column]), color=colour,
+                   lw=1.2, label=name)
+    ax_dp.set_ylabel("Pressure difference\n(psi)")
+    for axis in (ax_dx, ax_dp):
+        axis.axhline(0.0, color="k", lw=0.6)
+    return _finish(fig, list(axes), path, title)
+
+
+def plot_held_pressures(recordings: Mapping[str, Recording], targets: Mapping[str, tuple],
+                        path: Path, title: str = "") -> Path:
+    """Chamber pressures (psia) of runs with the piston held, each beside the levels it
+    should settle at (dotted): ``targets`` maps a run's label to its (cap, rod) pressures
+    [Pa]. No position panel: the piston does not move."""
+    fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
+    for index, (label, recording) in enumerate(recordings.items()):
+        colour = f"C{index % 10}"
+        time = _time(recording)
+        ax.plot(time, pascals_to_psi(recording[CAP_PRESSURE]), color=colour, lw=1.5,
+                label=f"{label} cap")
+        ax.plot(time, pascals_to_psi(recording[ROD_PRESSURE]), color=colour, lw=1.5, ls="--",
+                label=f"{label} rod")
+        for level in targets.get(label, ()):
+            ax.axhline(pascals_to_psi(level), color=colour, lw=0.9, ls=":")
+    ax.plot([], [], color="0.4", lw=0.9, ls=":", label="input-pressure curve (eq 4.2.7)")
+    ax.set_ylabel("Pressure (psia)")
+    return _finish(fig, [ax], path, title)
+
+
 def plot_friction_curve(
     curves: Mapping[str, tuple[np.ndarray, np.ndarray]],
     path: Path,

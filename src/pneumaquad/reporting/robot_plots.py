@@ -34,6 +34,7 @@ def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: P
                         label="simulated")
         angle_axis.set_title(joint.replace("_", " "))
         angle_axis.set_ylabel("Angle (deg)")
+        _at_least_span(angle_axis, MIN_ANGLE_SPAN)
         for side, colour in (("cap", "C3"), ("rod", "C2")):
             pressure = recording.get(f"{joint} {side} pressure [Pa]")
             if pressure is not None:
@@ -41,6 +42,20 @@ def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: P
         pressure_axis.set_ylabel("Pressure (psia)")
         pressure_axis.set_xlabel("Time (s)")
     return _save(fig, axes.ravel(), path, title)
+
+
+#: Least y span of an angle panel [deg]: a joint held still shows a flat line, not its
+#: micro-degree noise magnified with an offset.
+MIN_ANGLE_SPAN = 4.0
+
+
+def _at_least_span(axis, span: float) -> None:
+    """Widen ``axis``'s y range about its middle to at least ``span``, in plain numbers."""
+    low, high = axis.get_ylim()
+    if high - low < span:
+        middle = 0.5 * (low + high)
+        axis.set_ylim(middle - 0.5 * span, middle + 0.5 * span)
+    axis.ticklabel_format(axis="y", useOffset=False, style="plain")
 
 
 def plot_body(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
