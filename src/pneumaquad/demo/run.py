@@ -21,7 +21,12 @@ from pneumaquad.params import load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH as INCH
 from pneumaquad.params.conversions import PASCAL_PER_PSI as PSI
 from pneumaquad.reporting.html import HtmlPage
-from pneumaquad.reporting.plotting import plot_comparison, plot_difference, plot_held_pressures
+from pneumaquad.reporting.plotting import (
+    plot_comparison,
+    plot_difference,
+    plot_held_pressures,
+    plot_tank_run,
+)
 from pneumaquad.reporting.rig_experiment import run_rig_experiment
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import RigResult
@@ -333,11 +338,13 @@ def _tank(folder: Path, report: DemoReport) -> None:
         "final tank pressure [psia]": float(recording["tank pressure [Pa]"][-1]) / PSI,
         "RMSE [in]": summary["rmse [m]"] / INCH,
     }
+    path = plot_tank_run(recording, supply, folder / "tank-sine" / "tank.png",
+                         "1 Hz sine from a 0.5 L tank at 8 bar")
     report.add(
         "Finite tank supply",
         "A closed-loop 1 Hz sine drawn from a small tank "
         "through an ideal regulator: air consumed and the tank pressure over time; "
         "tracking degrades once the tank can no longer hold the regulated pressure.",
-        folder / "tank-sine" / "rig.png",
+        path,
         figures,
     )

@@ -31,6 +31,7 @@ VELOCITY = "velocity [m/s]"
 CAP_PRESSURE = "cap pressure [Pa]"
 ROD_PRESSURE = "rod pressure [Pa]"
 SUPPLY_PRESSURE = "supply pressure [Pa]"
+TANK_PRESSURE = "tank pressure [Pa]"
 FRICTION_FORCE = "friction force [N]"
 PNEUMATIC_FORCE = "pneumatic force [N]"
 AIR_CONSUMED = "air consumed [NL]"
@@ -224,6 +225,31 @@ def plot_held_pressures(recordings: Mapping[str, Recording], targets: Mapping[st
     ax.plot([], [], color="0.4", lw=0.9, ls=":", label="input-pressure curve (eq 4.2.7)")
     ax.set_ylabel("Pressure (psia)")
     return _finish(fig, [ax], path, title)
+
+
+def plot_tank_run(recording: Recording, set_point: float, path: Path,
+                  title: str = "") -> Path:
+    """A run drawn from a finite tank: position and reference (in), the tank pressure
+    beside the regulated supply and the regulator's set point ``set_point`` [Pa] (psia),
+    and the air consumed (NL) over time."""
+    time = _time(recording)
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8), layout="constrained")
+    ax_pos, ax_p, ax_air = axes
+    ax_pos.plot(time, metres_to_inches(recording[POSITION]), color="C0", lw=1.2,
+                label="Position")
+    ax_pos.plot(time, metres_to_inches(recording[REFERENCE]), color="k", ls="--", lw=0.9,
+                label="Reference")
+    ax_pos.set_ylabel("Position (in)")
+    ax_p.plot(time, pascals_to_psi(recording[TANK_PRESSURE]), color="C1", lw=1.6,
+              label="Tank")
+    ax_p.plot(time, pascals_to_psi(recording[SUPPLY_PRESSURE]), color="C0", lw=1.2,
+              label="Regulated supply")
+    ax_p.axhline(pascals_to_psi(set_point), color="0.35", ls=":", lw=1.0,
+                 label="Regulator set point")
+    ax_p.set_ylabel("Pressure (psia)")
+    ax_air.plot(time, recording[AIR_CONSUMED], color="C4", lw=1.5, label="Air consumed")
+    ax_air.set_ylabel("Air (NL)")
+    return _finish(fig, list(axes), path, title)
 
 
 def plot_friction_curve(
