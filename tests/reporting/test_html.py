@@ -47,3 +47,18 @@ def test_page_is_one_file_with_embedded_png(tmp_path: Path) -> None:
     assert text.count("src='data:image/png;base64,") == 2
     assert base64.b64encode(PNG_1X1).decode() in text
     assert "caption &#x27;quoted&#x27;" in text
+
+
+def test_text_gets_code_spans_and_links_to_files_beside_the_page(tmp_path) -> None:
+    from pneumaquad.reporting.html import HtmlPage
+
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "video.mp4").write_bytes(b"")
+    page = HtmlPage("t")
+    page.paragraph("see `pneumaquad report run` & run/video.mp4, docs/robot.md <b>")
+    page.table(["figure", "value"], [("report", "run/video.mp4")])
+    text = page.write(tmp_path / "report.html").read_text(encoding="utf-8")
+    assert "<code>pneumaquad report run</code>" in text
+    assert text.count("<a href='run/video.mp4'>run/video.mp4</a>") == 2
+    assert "<code>docs/robot.md</code>" in text  # not beside the page: no dead link
+    assert "&lt;b&gt;" in text and "`" not in text

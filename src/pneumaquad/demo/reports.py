@@ -241,8 +241,9 @@ def _robot_report(folder: Path, report: Report) -> None:
     report.add(
         "Report of a robot run",
         "`pneumaquad report robot-stand`: parameters, metrics, joint and body plots, "
-        "the actuators' friction, valve-area and input-pressure curves.",
-        page.parent / "valve-area.png",
+        "the actuators' friction, valve-area and input-pressure curves; below, its "
+        "thorax height, attitude, foot forces and air consumed.",
+        page.parent / "body.png",
         {"report": str(page.relative_to(folder))},
     )
 

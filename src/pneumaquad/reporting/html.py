@@ -11,11 +11,12 @@ from __future__ import annotations
 import base64
 import html
 import math
+import re
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["HtmlPage", "escape", "format_value", "png_data_uri", "table_html"]
+__all__ = ["HtmlPage", "escape", "format_value", "inline_html", "png_data_uri", "table_html"]
 
 _STYLE = (
     "body{font-family:system-ui,sans-serif;max-width:1050px;margin:auto;padding:0 1em;"
@@ -31,6 +32,25 @@ _STYLE = (
 def escape(text: Any) -> str:
     """HTML-escape the string form of ``text`` (quotes included)."""
     return html.escape(str(text), quote=True)
+
+
+#: Inline code as the Markdown of our texts writes it.
+_CODE = re.compile(r"`([^`]+)`")
+#: A relative path to a file beside the report (a run's files, a sub-report, a video).
+_FILE = re.compile(r"(?<![\w/.:-])((?:[\w.-]+/)*[\w-][\w.-]*\."
+                   r"(?:html|md|png|gif|mp4|csv|parquet|json|toml|npz|xml))(?![\w/])")
+
+
+#: A link :func:`inline_html` made.
+_LINK = re.compile(r"<a href='([^']+)'>\1</a>")
+
+
+def inline_html(text: Any) -> str:
+    """Escaped text with its Markdown code spans as ``<code>`` and relative file paths
+    (``step-train/report/report.html``, ``robot-walk/video.mp4``) as links."""
+    escaped = escape(text)
+    escaped = _FILE.sub(r"<a href='\1'>\1</a>", escaped)
+    return _CODE.sub(r"<code>\1</code>", escaped)
 
 
 def format_value(value: Any, digits: int = 5) -> str:
@@ -62,7 +82,8 @@ def _is_number(value: Any) -> bool:
 
 
 def table_html(headers: Sequence[str], rows: Iterable[Sequence[Any]], digits: int = 5) -> str:
-    """An HTML table; numbers are right-aligned, every cell is escaped.
+    """An HTML table; numbers are right-aligned, every cell is escaped (text cells through
+    :func:`inline_html`).
 
     Parameters
     ----------
@@ -84,7 +105,7 @@ def table_html(headers: Sequence[str], rows: Iterable[Sequence[Any]], digits: in
         cells = "".join(
             f"<td class='num'>{escape(format_value(c, digits))}</td>"
             if _is_number(c)
-            else f"<td>{escape(format_value(c, digits))}</td>"
+            else f"<td>{inline_html(format_value(c, digits))}</td>"
             for c in row
         )
         body.append(f"<tr>{cells}</tr>")
@@ -115,9 +136,10 @@ class HtmlPage:
         self.blocks.append(f"<h{level}>{escape(text)}</h{level}>")
 
     def paragraph(self, text: str, note: bool = False) -> None:
-        """Add a paragraph; ``note`` renders it smaller and grey."""
+        """Add a paragraph (:func:`inline_html`: code spans and file links); ``note``
+    renders it smaller and grey."""
         css = " class='note'" if note else ""
-        self.blocks.append(f"<p{css}>{escape(text)}</p>")
+        self.blocks.append(f"<p{css}>{inline_html(text)}</p>")
 
     def preformatted(self, text: str) -> None:
         """Add preformatted text (e.g. an error message)."""
@@ -152,8 +174,17 @@ class HtmlPage:
         )
 
     def write(self, path: Path) -> Path:
-        """Write the page (UTF-8) and return its path; parent folders are created."""
+        """Write the page (UTF-8) and return its path; parent folders are created. A file
+        link whose file is not beside the page (a path of the repository, a file not
+        written) is shown as code instead."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(self.render(), encoding="utf-8")
+
+        def checked(match: re.Match[str]) -> str:
+            target = html.unescape(match.group(1))
+            if (path.parent / target).exists():
+                return match.group(0)
+            return f"<code>{match.group(1)}</code>"
+
+        path.write_text(_LINK.sub(checked, self.render()), encoding="utf-8")
         return path
