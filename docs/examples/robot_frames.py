@@ -6,7 +6,7 @@ thorax, at the given simulated times (nearest recorded sample), and writes one P
 
 Run (the images of docs/robot.md and the README)::
 
-    .venv/bin/python docs/examples/robot_frames.py runs/walk-ramp 40 62 86 \\
+    .venv/bin/python docs/examples/robot_frames.py runs/walk-ramp 40 62 86 --distance 1.8 \\
         --output docs/images/walk-ramp-frames.png
     .venv/bin/python docs/examples/robot_frames.py runs/stand 6 --width 800 --height 500 \\
         --distance 1.6 --no-label --output docs/images/robot-stand.png
@@ -39,7 +39,12 @@ def render(run: Path, times: list[float], width: int, height: int, distance: flo
                                         distance=distance)))
         image = Image.fromarray(frame)
         if label:
-            ImageDraw.Draw(image).text((8, 6), f"{recorded[index]:.0f} s", fill=(255, 255, 255))
+            draw = ImageDraw.Draw(image)  # dark text on a light box: readable on the sky
+            text = f"{recorded[index]:.0f} s"
+            box = draw.textbbox((8, 6), text)
+            draw.rectangle((box[0] - 4, box[1] - 3, box[2] + 4, box[3] + 3),
+                           fill=(255, 255, 255))
+            draw.text((8, 6), text, fill=(20, 20, 20))
         strip.paste(image, (k * width, 0))
     return strip
 

@@ -416,7 +416,19 @@ def _add_visual_assets(spec: mujoco.MjSpec) -> None:
     )
     material = spec.add_material(name="grid", texrepeat=[8, 8], reflectance=0.05)
     material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture.name
+    spec.add_texture(  # a pale sky, so the view above the horizon is not a black band
+        name="sky",
+        type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
+        rgb1=[0.78, 0.84, 0.92],
+        rgb2=[0.97, 0.97, 0.97],
+        width=256,
+        height=256,
+    )
     spec.worldbody.add_light(name="sun", pos=[0, 0, 4], dir=[0, 0.3, -1], castshadow=True)
+    # the camera's own light, brighter than MuJoCo's default, so the robot reads in every frame
+    spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
+    spec.visual.headlight.diffuse = [0.55, 0.55, 0.55]
     spec.visual.global_.offwidth = 1280
     spec.visual.global_.offheight = 960
 
