@@ -198,6 +198,25 @@ def test_recorded_reference_file(tmp_path: Path, suffix: str) -> None:
     assert summary["steps"] == 2000
 
 
+def test_recorded_reference_in_milliseconds(tmp_path: Path) -> None:
+    """A lab file's time column in ms (the demo's lab CSV): --time-unit ms reads it as the
+    same reference as seconds."""
+    times = np.arange(0.0, 2.0, 0.01)
+    seconds, millis = tmp_path / "s.csv", tmp_path / "ms.csv"
+    for path, scale in ((seconds, 1.0), (millis, 1e3)):
+        np.savetxt(path, np.column_stack([times * scale, 0.02 + 0.004 * times]), delimiter=",",
+                   header="t,x", comments="")
+    expected = signals.recorded_reference(seconds, "t", "x", 1.0, 1e-3)
+    np.testing.assert_allclose(
+        signals.recorded_reference(millis, "t", "x", 1.0, 1e-3, time_scale=1e-3), expected,
+        rtol=0, atol=1e-15)
+    out = tmp_path / "run"
+    done = run_cli("rig", "track", "file", "--file", str(millis), "--time-column", "t",
+                   "--time-unit", "ms", "--position-column", "x", "-o", str(out), cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert json.loads((out / "summary.json").read_text())["steps"] == expected.size
+
+
 def test_recorded_reference_rejects_non_monotonic_time(tmp_path: Path) -> None:
     path = tmp_path / "bad.csv"
     path.write_text("t,x\n0,1\n0.2,2\n0.1,3\n")

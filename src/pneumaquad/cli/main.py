@@ -274,7 +274,8 @@ def rig_track(
         ),
     ] = 2,
     file: Annotated[Path | None, typer.Option(help="CSV or .mat reference (file).")] = None,
-    time_column: Annotated[str, typer.Option(help="Time column in --file [s].")] = "time",
+    time_column: Annotated[str, typer.Option(help="Time column in --file.")] = "time",
+    time_unit: Annotated[str, typer.Option(help="Unit of the time column (s, ms...).")] = "s",
     position_column: Annotated[str, typer.Option(help="Position column in --file.")] = "position",
     position_unit: Annotated[str, typer.Option(help="Unit of the position column.")] = "m",
     profile: ProfileOption = False,
@@ -298,6 +299,7 @@ def rig_track(
         time_column,
         position_column,
         position_unit,
+        time_unit,
     )
     folder = create_run_folder(output, f"rig-track-{reference}")
     from pneumaquad.reporting.rig_experiment import run_rig_experiment
@@ -337,6 +339,7 @@ def build_reference(
     time_column: str,
     position_column: str,
     position_unit: str,
+    time_unit: str = "s",
 ) -> np.ndarray:
     """Position reference [m] per control step for ``rig track``.
 
@@ -404,6 +407,7 @@ def build_reference(
             position_column,
             quantity(f"1 {position_unit}", "length", "--position-unit"),
             dt,
+            quantity(f"1 {time_unit}", "time", "--time-unit"),
         )
 
     builders: dict[str, Callable[[], np.ndarray]] = {

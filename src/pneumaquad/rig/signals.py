@@ -104,6 +104,7 @@ def recorded_reference(
     value_column: str,
     value_scale: float,
     control_step: float,
+    time_scale: float = 1.0,
 ) -> np.ndarray:
     """Position reference read from a CSV or MATLAB .mat file, resampled to the control grid.
 
@@ -112,11 +113,13 @@ def recorded_reference(
     path : Path
         CSV with a header row, or .mat (v5; variables named by the columns).
     time_column, value_column : str
-        Column (or variable) names of time [s] and position.
+        Column (or variable) names of time and position.
     value_scale : float
         Factor converting the file's position unit to metres.
     control_step : float
         Output sample time [s].
+    time_scale : float
+        Factor converting the file's time unit to seconds (1e-3 for milliseconds).
 
     Returns
     -------
@@ -143,7 +146,7 @@ def recorded_reference(
             raise RecordedReferenceError(
                 f"{path}: column {name!r} not found; columns are {sorted(columns)}"
             )
-    times = columns[time_column]
+    times = columns[time_column] * time_scale
     values = columns[value_column] * value_scale
     if times.size < 2 or not np.all(np.isfinite(times)) or not np.all(np.isfinite(values)):
         raise RecordedReferenceError(f"{path}: needs at least two finite samples")
