@@ -43,6 +43,9 @@ def test_report_run_with_measured_data(rig_run: Path, tmp_path: Path) -> None:
     )
     assert result.exit_code == 0, result.output
     assert (out / "comparison.json").is_file()
+    # the figures are printed too, units kept
+    assert "simulated against measured" in result.output
+    assert "position [m]" in result.output and "lag [s]" in result.output
 
 
 def test_missing_folder_exits_2_naming_it(tmp_path: Path) -> None:

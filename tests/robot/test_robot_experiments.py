@@ -177,6 +177,21 @@ def test_cli_leg_validate_writes_a_run_folder(tmp_path: Path) -> None:
     assert "front_right_gamma cap pressure [Pa]" in recording
 
 
+def test_cli_leg_matrix_prints_every_run(tmp_path: Path) -> None:
+    """Several runs (--signal all) end with one table of each run's angle RMSE."""
+    out = tmp_path / "matrix"
+    result = runner.invoke(
+        app, ["leg", "validate", "--joint", "gamma", "--signal", "all", "--settle", "0.2",
+              "-o", str(out)], terminal_width=200,
+    )
+    assert result.exit_code == 0, result.output
+    table = result.output[result.output.index("leg validation: every run"):]
+    for kind in ("steps", "trapezoid", "slow-sine", "fast-sine"):
+        rmse = json.loads((out / f"gamma-{kind}" / "summary.json").read_text())[
+            "angle rmse [deg]"]["front_right_gamma"]
+        assert f"{rmse:.2f}" in table and f"gamma-{kind}" in table
+
+
 def test_cli_robot_profile_accounts_for_the_wall_time(tmp_path: Path) -> None:
     out = tmp_path / "run"
     result = runner.invoke(

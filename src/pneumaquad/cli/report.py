@@ -105,7 +105,28 @@ def report_command(
             path = build_run_report(run, output, measured, mapping, time_offset, update)
     except REPORT_ERRORS as error:
         _fail(error)
+    if measured is not None:
+        _print_comparison(path.parent / "comparison.json")
     console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)
+
+
+def _print_comparison(path: Path) -> None:
+    """The simulated-against-measured figures of ``comparison.json``, one row a signal."""
+    import json
+
+    from rich.markup import escape
+    from rich.table import Table
+
+    if not path.is_file():
+        return
+    rows = json.loads(path.read_text(encoding="utf-8")).get("signals", [])
+    table = Table(title="simulated against measured")
+    for header in ("signal", "RMSE", "RMSE [% of range]", "largest error", "lag [s]"):
+        table.add_column(escape(header), justify="left" if header == "signal" else "right")
+    for row in rows:  # units in brackets are text, not markup
+        table.add_row(escape(row["signal"]), f"{row['rmse']:.4g}", f"{row['rmse_percent']:.3g}",
+                      f"{row['max_abs_error']:.4g}", f"{row['lag']:+.4f}")
+    console.print(table)
 
 
 def _cost_table(output: Path, params: str, repeats: int, duration: float) -> None:

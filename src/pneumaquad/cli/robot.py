@@ -317,6 +317,7 @@ def leg_validate(
     signals = LEG_SIGNALS if signal == "all" else (signal,)
     several = len(joints) * len(signals) > 1
     base = create_run_folder(output, f"leg-{joint}-{signal}") if several else output
+    folders = []
     for tested in joints:
         for kind in signals:
             worker = _start_video(video, video_fps, video_quality)
@@ -324,9 +325,29 @@ def leg_validate(
                 simulation = _simulation(clock, params, overrides, "fixed")
                 phases = leg_validation_phases(simulation, tested, kind, settle)
                 folder = base / f"{tested}-{kind}" if several else output
-                _run(simulation, phases, folder, f"leg-{tested}-{kind}",
-                     f"front-right {tested}: {kind}", worker, video, clock, profile)
+                folders.append((tested, kind, _run(
+                    simulation, phases, folder, f"leg-{tested}-{kind}",
+                    f"front-right {tested}: {kind}", worker, video, clock, profile)))
                 clock = StageClock()  # the next run's stages (start-up counted once)
+    if several:
+        _print_leg_matrix(folders, base)
+
+
+def _print_leg_matrix(folders: list[tuple[str, str, Path]], base: Path) -> None:
+    """One table of a leg matrix: per run, the tested joint's angle RMSE and its folder
+    (in ``base``)."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    from pneumaquad.io.run_folder import read_summary
+
+    table = Table(title=escape(f"leg validation: every run, in {base}"))
+    for header in ("joint", "signal", "angle RMSE [deg]", "run folder"):
+        table.add_column(escape(header), justify="right" if "RMSE" in header else "left")
+    for tested, kind, folder in folders:
+        rmse = read_summary(folder).get("angle rmse [deg]", {}).get(f"front_right_{tested}")
+        table.add_row(tested, kind, "–" if rmse is None else f"{rmse:.2f}", escape(folder.name))
+    console.print(table)
 
 
 @leg_app.command("foot-cycle")
