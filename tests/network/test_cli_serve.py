@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import threading
 from pathlib import Path
 
@@ -43,3 +44,7 @@ def test_actuators_command_runs_against_a_dynamics_server(tmp_path: Path) -> Non
     assert not thread.is_alive() and server.steps == 50  # stopped by the client's BYE
     for name in ("recording.parquet", "packets.parquet", "timing.json", "rtt.png"):
         assert (tmp_path / name).is_file(), name
+    # the missed deadlines are said, not only filed in timing.json
+    timing = json.loads((tmp_path / "timing.json").read_text())
+    late, total = timing["round trips over deadline [count]"], timing["round trips [count]"]
+    assert f"round trips over the 1 ms deadline: {late} of {total}" in result.output

@@ -91,6 +91,20 @@ def _print(summary: dict, keys: tuple[str, ...]) -> None:
             console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
 
 
+def _print_deadline(summary: dict) -> None:
+    """How many round trips missed the control step's deadline, in words (timing.json has
+    the figures)."""
+    late = summary.get("round trips over deadline [count]")
+    total = summary.get("round trips [count]")
+    deadline = summary.get("deadline [s]")
+    if late is None or not total or deadline is None:
+        return
+    line = (f"  round trips over the {deadline * 1e3:g} ms deadline: {late} of {total} "
+            f"({100.0 * late / total:.1f} %)")
+    console.print(line, markup=False, highlight=False,
+                  style="yellow" if late else None)
+
+
 #: Longest reply or command timeout [s].
 MAX_NETWORK_TIMEOUT = 60.0
 PORT_RANGE = Bounds(0, 65535, lower_inclusive=True)
@@ -286,6 +300,7 @@ def serve_actuators(
     console.print(f"run folder: [bold]{folder}[/bold]")
     _print(summary, ("control steps [count]", "wall time [s]", "resends [count]",
                      "round-trip time median [s]", "round-trip time p99 [s]"))
+    _print_deadline(summary)
     if interrupted:
         stderr_console.print("[yellow]interrupted: the files hold the part that ran[/yellow]")
         raise typer.Exit(130)
