@@ -96,26 +96,30 @@ def plot_packet_timeline(log: PacketLog, nominal_period: float, path: Path | str
     """
     received = log.direction == RECEIVED
     valid = received & (log.classification < MALFORMED_MIN)
+    # time since the first packet either way, not the raw monotonic clock
+    stamps_all = np.concatenate([log.receive_time[received], log.send_time[~received]])
+    stamps_all = stamps_all[np.isfinite(stamps_all)]
+    origin = float(stamps_all.min()) if stamps_all.size else 0.0
     fig, ax = plt.subplots(figsize=(9, 4), layout="constrained")
     for mask, times, label, color in (
         (valid, log.receive_time, "received", "tab:blue"),
         (log.direction == SENT, log.send_time, "sent", "tab:orange"),
     ):
-        stamps = np.sort(times[mask])
+        stamps = np.sort(times[mask]) - origin
         if stamps.size > 1:
             ax.semilogy(stamps[1:], np.diff(stamps) * SECONDS_TO_MS, ".", ms=2, color=color,
                         label=f"{label} gap")
     arrivals = log.receive_time[valid]
     pauses = find_pauses(arrivals, pause_factor * nominal_period)
     for index, (start, duration) in enumerate(pauses):
-        ax.axvspan(start, start + duration, color="tab:red", alpha=0.2,
+        ax.axvspan(start - origin, start - origin + duration, color="tab:red", alpha=0.2,
                    label="pause" if index == 0 else None)
-    malformed = log.receive_time[received & (log.classification >= MALFORMED_MIN)]
+    malformed = log.receive_time[received & (log.classification >= MALFORMED_MIN)] - origin
     if malformed.size:
         ax.plot(malformed, np.full(malformed.size, nominal_period * SECONDS_TO_MS), "x",
                 color="k", label="malformed")
     ax.axhline(nominal_period * SECONDS_TO_MS, color="0.4", lw=1, ls="--", label="nominal period")
-    ax.set_xlabel("Local time (s)")
+    ax.set_xlabel("Time since the first packet (s)")
     ax.set_ylabel("Gap to previous packet (ms)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper right", fontsize="small")
