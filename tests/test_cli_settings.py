@@ -81,3 +81,28 @@ def test_the_library_checks_the_same_ranges() -> None:
         check_walk_settings(WalkSettings(stance_control=StanceControlSettings(force_gain=2.0)))
     assert option_names(WALK_SETTINGS, ("minimum_margin", "force_gain")) == (
         "--margin or --force-gain")
+
+
+def test_options_with_a_unit_take_quantities() -> None:
+    """A number option with a unit takes a bare number in that unit or a quantity of the
+    same kind: --distance "20 cm", --heading "0.5 rad", --speed "15 mm/s"."""
+    received: list[Any] = []
+    result = CliRunner().invoke(_app(received), [
+        "--distance", "20 cm", "--heading", "0.5 rad", "--speed", "15 mm/s",
+        "--period", "8"])
+    assert result.exit_code == 0, result.output
+    settings, _ = received[0]
+    assert settings.distance == pytest.approx(0.2)
+    assert settings.heading == pytest.approx(0.5)
+    assert settings.speed == pytest.approx(0.015)
+    assert settings.period == 8.0
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    (["--distance", "20 kg"], "expected a number in m"),
+    (["--distance", "2 km"], "should be at least 0.01 m and at most 100 m"),
+])
+def test_a_quantity_of_another_kind_or_out_of_range_is_refused(arguments, message) -> None:
+    result = CliRunner().invoke(_app([]), arguments, terminal_width=200)
+    assert result.exit_code == 2
+    assert message in " ".join(result.output.replace("│", " ").split())

@@ -293,6 +293,32 @@ def option_range(bounds: Bounds) -> Callable[[float | int | None], float | int |
     return check
 
 
+def number_in(unit: str) -> Callable[[Any], float]:
+    """Typer ``parser`` of a number option whose unit is ``unit`` (``"m"``, ``"deg/s"``):
+    a bare number is in ``unit`` already, a quantity with another unit of the same kind
+    (``"20 cm"``, ``"0.5 rad"``) is converted to it. A text that is neither is a usage
+    error naming the value and the unit expected (exit status 2)."""
+
+    def parse(text: Any) -> float:
+        if isinstance(text, (int, float)):
+            return float(text)
+        try:
+            return float(text)
+        except ValueError:
+            pass
+        from pneumaquad.params.units import ureg
+
+        try:
+            return float(ureg.Quantity(text).to(unit).magnitude)
+        except Exception:
+            raise typer.BadParameter(
+                f"{text!r}: expected a number in {unit} or a quantity such as "
+                f"\"1 {unit}\"") from None
+
+    parse.__name__ = f"number in {unit}"
+    return parse
+
+
 def finish_run(folder: Path, summary: dict, clock: StageClock | None = None,
                profile: bool = False) -> None:
     """Print where a run went and end with 130 if it was interrupted.

@@ -17,6 +17,7 @@ import typer
 from pneumaquad.cli.common import (
     MAX_SIMULATED_TIME,
     console,
+    number_in,
     option_range,
     progress_bar,
     stderr_console,
@@ -56,7 +57,8 @@ def report_command(
         typer.Option("--time-offset", help="Added to the measured time stamps [s], "
                      "-86400 to 86400.",
                      callback=option_range(Bounds(-86400.0, 86400.0, "s",
-                                                  lower_inclusive=True))),
+                                                  lower_inclusive=True)),
+                     parser=number_in("s"), metavar="QUANTITY"),
     ] = 0.0,
     output: Annotated[
         Path | None,
@@ -84,7 +86,8 @@ def report_command(
     duration: Annotated[
         float, typer.Option(help="--cost-table: simulated time per run [s], 0.1 to 3600.",
                             callback=option_range(Bounds(0.1, MAX_SIMULATED_TIME, "s",
-                                                         lower_inclusive=True)))
+                                                         lower_inclusive=True)),
+                            parser=number_in("s"), metavar="QUANTITY")
     ] = 4.0,
 ) -> None:
     """Write report.html (self-contained, figures embedded) and the PNGs of a run folder,

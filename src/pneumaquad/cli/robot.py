@@ -28,6 +28,7 @@ from pneumaquad.cli.common import (
     command_group,
     console,
     finish_run,
+    number_in,
     option_range,
     progress_bar,
     refuse_occupied_output,
@@ -287,7 +288,8 @@ def leg_validate(
         str, typer.Option(help="steps, trapezoid, slow-sine, fast-sine, or all.")
     ] = "steps",
     settle: Annotated[float, typer.Option(
-        help="Open-loop extension phase [s], 0 to 3600.", callback=option_range(PHASE_TIME))
+        help="Open-loop extension phase [s], 0 to 3600.", callback=option_range(PHASE_TIME),
+        parser=number_in("s"), metavar="QUANTITY")
     ] = 2.0,
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
@@ -390,7 +392,8 @@ def leg_foot_cycle(
 @refuse_occupied_output
 def robot_stand(
     hold: Annotated[float, typer.Option(help="Holding time after rising [s], 0 to 3600.",
-                                        callback=option_range(PHASE_TIME))] = 3.0,
+                                        callback=option_range(PHASE_TIME),
+                                        parser=number_in("s"), metavar="QUANTITY")] = 3.0,
     posture: Annotated[
         bool, typer.Option("--posture/--no-posture", help="Body height/roll/pitch commands.")
     ] = True,

@@ -27,6 +27,7 @@ from pneumaquad.cli.common import (
     check_step_count,
     command_group,
     console,
+    number_in,
     option_range,
     refuse_occupied_output,
     stderr_console,
@@ -113,6 +114,7 @@ TIMEOUT_RANGE = Bounds(0.0, MAX_NETWORK_TIMEOUT, "s")
 BusyWaitOption = Annotated[
     float,
     typer.Option(callback=option_range(Bounds(0.0, 1.0, "s", lower_inclusive=True)),
+                 parser=number_in("s"), metavar="QUANTITY",
                  help="Poll this long [s] before sleeping while waiting for a datagram: "
                  "lower, steadier latency for a busier core (0 = sleep at once; at most 1)."),
 ]
@@ -133,9 +135,11 @@ def serve_dynamics(
                                       callback=option_range(PORT_RANGE))] = 47000,
     peer: Annotated[str | None, typer.Option(help="Accept only HOST:PORT.")] = None,
     timeout: Annotated[float, typer.Option(help="Realtime: command timeout [s], up to 60.",
-                                           callback=option_range(TIMEOUT_RANGE))] = 0.1,
+                                           callback=option_range(TIMEOUT_RANGE),
+                                           parser=number_in("s"), metavar="QUANTITY")] = 0.1,
     duration: Annotated[float | None, typer.Option(
-        help="Wall-clock limit [s], up to 86400.", callback=option_range(WALL_DURATION))
+        help="Wall-clock limit [s], up to 86400.", callback=option_range(WALL_DURATION),
+        parser=number_in("s"), metavar="QUANTITY")
     ] = None,
     busy_wait: BusyWaitOption = 0.002,
     posture: Annotated[str, typer.Option(help="Initial alpha,beta,gamma of every leg [deg].")]
@@ -240,12 +244,15 @@ def serve_actuators(
     = "gamma-step",
     settle: Annotated[float, typer.Option(
         help="Hold before the motion [s], 0 to 3600.",
-        callback=option_range(Bounds(0.0, 3600.0, "s", lower_inclusive=True)))] = 0.5,
+        callback=option_range(Bounds(0.0, 3600.0, "s", lower_inclusive=True)),
+        parser=number_in("s"), metavar="QUANTITY")] = 0.5,
     duration: Annotated[float, typer.Option(help="Simulated time [s], up to 3600.",
-                                            callback=option_range(SIMULATED_DURATION))] = 1.0,
+                                            callback=option_range(SIMULATED_DURATION),
+                                            parser=number_in("s"), metavar="QUANTITY")] = 1.0,
     reply_timeout: Annotated[float, typer.Option(
         help="Wait for a STATE before resending [s], up to 60.",
-        callback=option_range(TIMEOUT_RANGE))] = 0.05,
+        callback=option_range(TIMEOUT_RANGE), parser=number_in("s"), metavar="QUANTITY")
+    ] = 0.05,
     busy_wait: BusyWaitOption = 0.002,
     output: OutputOption = None,
 ) -> None:

@@ -22,7 +22,7 @@ from typing import Annotated, Any, TypeVar
 
 import typer
 
-from pneumaquad.cli.common import option_range
+from pneumaquad.cli.common import number_in, option_range
 from pneumaquad.params.settings import Setting
 
 __all__ = ["option_names", "settings_options"]
@@ -107,11 +107,14 @@ def _options(settings_type: type, described: Mapping[str, Setting],
             continue
         help_text = setting.help
         callback = None
+        units: dict[str, Any] = {}
         if setting.bounds is not None:
             help_text += f", {setting.bounds.expectation}"
             callback = option_range(setting.bounds)
+            if setting.bounds.unit:  # "0.2" or "20 cm" alike
+                units = {"parser": number_in(setting.bounds.unit), "metavar": "QUANTITY"}
         annotation = Annotated[hints[name], typer.Option(help=help_text + ".",
-                                                         callback=callback)]
+                                                         callback=callback, **units)]
         shown = default / setting.scale if setting.scale != 1.0 else default
         parameter = inspect.Parameter(_identifier(name, setting),
                                       inspect.Parameter.KEYWORD_ONLY, default=shown,

@@ -36,8 +36,9 @@ def escape(text: Any) -> str:
 
 #: Inline code as the Markdown of our texts writes it.
 _CODE = re.compile(r"`([^`]+)`")
-#: A relative path to a file beside the report (a run's files, a sub-report, a video).
-_FILE = re.compile(r"(?<![\w/.:-])((?:[\w.-]+/)*[\w-][\w.-]*\."
+#: A relative path into a folder beside the report (a run's files, a sub-report, a
+#: video): at least one folder, so that a bare file name in a label stays text.
+_FILE = re.compile(r"(?<![\w/.:-])((?:[\w.-]+/)+[\w-][\w.-]*\."
                    r"(?:html|md|png|gif|mp4|csv|parquet|json|toml|npz|xml))(?![\w/])")
 
 
