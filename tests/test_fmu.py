@@ -249,6 +249,7 @@ def test_the_outputs_agree_with_each_other(unpacked: tuple[Any, str],
 #: Real parameters of the set that are plain numbers (no unit).
 DIMENSIONLESS = {
     "gas.heat_capacity_ratio", "gas.critical_pressure_ratio", "valve.laminar_pressure_ratio",
+    "valve.area_scale",
     "valve.simple.cap_discharge_coefficient", "valve.simple.rod_discharge_coefficient",
     "valve.simple.iso_critical_ratio", "friction.stribeck_exponent",
     "thermodynamics.polytropic_exponent",

@@ -245,6 +245,7 @@ def _expected_parameters(setup: RigSetup) -> dict[str, object]:
         "max_voltage": valve.max_voltage,
         "spool_time_constant": valve.spool_time_constant,
         "laminar_pressure_ratio": valve.laminar_pressure_ratio,
+        "valve_area_scale": valve.area_scale,
         "simple_max_area": simple.max_area,
         "simple_leak_area": simple.leak_area,
         "simple_full_scale_voltage": simple.full_scale_voltage,
@@ -298,7 +299,7 @@ SWAP_CONFIGURATIONS = (
     ('valve.model="simple"', 'valve.flow_form="iso6358"', 'valve.input_pressure="switched"',
      'friction.model="lugre"', "rig.spacer=true", "valve.cap_port=1"),
     ('friction.model="coulomb_viscous"', 'thermodynamics.model="polytropic"',
-     'valve.flow_form="iso6358"'),
+     'valve.flow_form="iso6358"', "valve.area_scale=1.5"),
 )
 
 

@@ -139,3 +139,37 @@ def test_valve_parts_switch_separately() -> None:
             input_pressure(centered, supply, exhaust, port.high_pressure_cutoff,
                            port.low_pressure_cutoff)
         )
+
+
+@pytest.mark.parametrize("overrides", [(), ('valve.model="simple"',),
+                                       ('valve.flow_form="iso6358"',),
+                                       ('valve.area_curve="linear"',)])
+def test_valve_area_scale_scales_every_orifice(overrides) -> None:
+    """valve.area_scale multiplies both ports' conductances, every valve model and form,
+    and leaves the source pressures; the orifice mass flow of a port scales with it."""
+    from pneumaquad.core.pneumatics import valve_connections
+
+    base = pack_parameter_array([actuator_setup("crr-gamma", *overrides)])[0]
+    double = pack_parameter_array([actuator_setup("crr-gamma", *overrides,
+                                                  "valve.area_scale=2.5")])[0]
+    for centered in (-2.0, -0.4, 0.0, 0.3, 1.7):
+        one = valve_connections(base, centered, 4.5e5)
+        two = valve_connections(double, centered, 4.5e5)
+        assert (two[0], two[2]) == (one[0], one[2])
+        assert two[1] == pytest.approx(2.5 * one[1], rel=1e-15)
+        assert two[3] == pytest.approx(2.5 * one[3], rel=1e-15)
+
+
+def test_robot_sizing_keys_reach_every_cylinder() -> None:
+    """actuators.bore and actuators.valve_area_scale of a robot file load every joint's
+    actuator with them (and leave the rest of each file)."""
+    from pneumaquad.params import load_actuator, load_robot
+
+    robot = load_robot("crr-quadruped", ['actuators.bore="1.25 in"',
+                                         "actuators.valve_area_scale=1.5"])
+    for joint in ("alpha", "beta", "gamma"):
+        name = getattr(robot.actuators, joint)
+        actuator = load_actuator(name, robot.actuators.actuator_overrides())
+        assert actuator.cylinder.bore == pytest.approx(1.25 * 0.0254)
+        assert actuator.valve.area_scale == 1.5
+        assert actuator.cylinder.stroke == load_actuator(name).cylinder.stroke

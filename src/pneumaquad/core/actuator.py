@@ -109,6 +109,7 @@ def pack_parameters(actuator: ActuatorParameters, out: np.void | None = None) ->
     record["max_voltage"] = valve.max_voltage
     record["spool_time_constant"] = valve.spool_time_constant
     record["laminar_pressure_ratio"] = valve.laminar_pressure_ratio
+    record["valve_area_scale"] = valve.area_scale
     simple = valve.simple
     record["simple_max_area"] = simple.max_area
     record["simple_leak_area"] = simple.leak_area

@@ -84,6 +84,7 @@ ACTUATOR_PARAMETERS_DTYPE = np.dtype([
     ("max_voltage", "f8"),  # [V]
     ("spool_time_constant", "f8"),  # first-order spool lag [s], 0 = none
     ("laminar_pressure_ratio", "f8"),  # [-]
+    ("valve_area_scale", "f8"),  # factor on every orifice area of the valve [-]
     # simple valve (and the linear area curve of the underlapped one)
     ("simple_max_area", "f8"),  # [m^2]
     ("simple_leak_area", "f8"),  # [m^2]

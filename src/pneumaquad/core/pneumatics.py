@@ -68,7 +68,8 @@ def valve_connections(p, centered: float, supply_pressure: float):
 
     Returns (cap source pressure [Pa], cap conductance, rod source pressure [Pa], rod
     conductance). Conductance is an effective area cd·A [m^2] for the orifice form and a
-    sonic conductance [m^3/(s Pa)] for the ISO 6358 form. Simple valve: positive voltage
+    sonic conductance [m^3/(s Pa)] for the ISO 6358 form, either times the valve's
+    ``area_scale`` (1 as fitted; a sizing factor). Simple valve: positive voltage
     connects the cap to supply and the rod to exhaust (thesis Fig. 18). Underlapped valve:
     each port sees the tanh input pressure of eq 4.2.7 through its polynomial area; either
     part can be swapped for the simple valve's (``input_pressure_curve`` switched
@@ -76,17 +77,18 @@ def valve_connections(p, centered: float, supply_pressure: float):
     """
     exhaust = p.exhaust_pressure
     iso = p.flow_form == FLOW_ISO6358
+    scale = p.valve_area_scale
     if p.valve_model == VALVE_SIMPLE:
         if iso:
             span = abs(centered) / p.simple_full_scale_voltage
-            cap_conductance = p.sonic_conductance * span + p.leak_conductance
+            cap_conductance = (p.sonic_conductance * span + p.leak_conductance) * scale
             rod_conductance = cap_conductance
         else:
             area = simple_valve_area(
                 centered, p.simple_max_area, p.simple_leak_area, p.simple_full_scale_voltage
             )
-            cap_conductance = p.cap_discharge_coefficient * area
-            rod_conductance = p.rod_discharge_coefficient * area
+            cap_conductance = p.cap_discharge_coefficient * area * scale
+            rod_conductance = p.rod_discharge_coefficient * area * scale
         if centered >= 0.0:
             return supply_pressure, cap_conductance, exhaust, rod_conductance
         return exhaust, cap_conductance, supply_pressure, rod_conductance
@@ -110,15 +112,15 @@ def valve_connections(p, centered: float, supply_pressure: float):
         area = simple_valve_area(
             centered, p.simple_max_area, p.simple_leak_area, p.simple_full_scale_voltage
         )
-        cap_area = p.cap_discharge_coefficient * area
-        rod_area = p.rod_discharge_coefficient * area
+        cap_area = p.cap_discharge_coefficient * area * scale
+        rod_area = p.rod_discharge_coefficient * area * scale
     else:
         cap_area = polynomial_area(
             centered, p.cap_polynomial_negative, p.cap_polynomial_positive
-        )
+        ) * scale
         rod_area = polynomial_area(
             centered, p.rod_polynomial_negative, p.rod_polynomial_positive
-        )
+        ) * scale
     if iso:
         return (
             cap_source,

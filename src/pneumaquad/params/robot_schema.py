@@ -288,12 +288,30 @@ class CylinderMounting(_Model):
         "`supply.supply_pressure`; gauge units refer to the gamma file's atmosphere.",
         "not in thesis: one regulator for the robot",
         default=None)
+    bore: PositiveLength | None = described(
+        "Bore of all twelve cylinders in place of each actuator file's `cylinder.bore` "
+        "(sizing; the rod, stroke and linkage stay).",
+        "not in thesis: cylinder sizing (the robot's: 1.0625 in, App. C.1.1)",
+        default=None)
+    valve_area_scale: Annotated[Number, Bounds(0.0, 100.0, upper_inclusive=True)] | None = (
+        described(
+            "Factor on the orifice areas of all twelve valves in place of each actuator "
+            "file's `valve.area_scale` (sizing: a larger or smaller valve of the same "
+            "characteristic).",
+            "not in thesis: valve sizing",
+            default=None))
 
     def actuator_overrides(self) -> list[str]:
-        """``--set`` items that load the actuator files with this robot's supply."""
-        if self.supply_pressure is None:
-            return []
-        return [f'supply.supply_pressure="{self.supply_pressure!r} Pa"']
+        """``--set`` items that load the actuator files with this robot's supply, bore
+        and valve size (those given)."""
+        overrides = []
+        if self.supply_pressure is not None:
+            overrides.append(f'supply.supply_pressure="{self.supply_pressure!r} Pa"')
+        if self.bore is not None:
+            overrides.append(f'cylinder.bore="{self.bore!r} m"')
+        if self.valve_area_scale is not None:
+            overrides.append(f"valve.area_scale={self.valve_area_scale!r}")
+        return overrides
 
 
 class JointControllerParameters(ControllerParameters):

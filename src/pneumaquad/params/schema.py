@@ -560,6 +560,13 @@ class ValveParameters(_Model):
     spool_time_constant: TimeConstant = described(
         "Time constant of a first-order spool lag; 0 turns it off.",
         "not in thesis: spool dynamics neglected (0)")
+    area_scale: Annotated[Number, Bounds(0.0, 100.0, lower_inclusive=False,
+                                         upper_inclusive=True)] = described(
+        "Factor on the valve's orifice areas, every model and form: a larger or smaller "
+        "valve of the same characteristic (the input-pressure curves are kept). 1: the "
+        "valve as fitted.",
+        "not in thesis: valve sizing (studies)",
+        default=1.0)
     laminar_pressure_ratio: Annotated[Number, Bounds(0.9, 1.0, upper_inclusive=False)] = described(
         "Pressure ratio above which the flow turns laminar, a numerical regularisation near "
         "equal pressures (docs/physics.md).",
