@@ -74,3 +74,11 @@ def test_a_walk_setting_out_of_range_names_the_option() -> None:
     parse_study(text)
     message = _refused(text.replace('distance = "0.3 m"', 'distance = "300 m"'))
     assert "run.distance" in message and "at most 100 m" in message
+
+
+@pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[2] / "studies")
+                                        .glob("*.toml")), ids=lambda path: path.stem)
+def test_every_shipped_study_is_a_valid_spec(path: Path) -> None:
+    """Each shipped study's keys, values and distributions pass the checks a run makes
+    before anything runs (the sizing study's bore and valve keys included)."""
+    parse_study(path.read_text(encoding="utf-8"))
