@@ -115,14 +115,14 @@ def report_command(
 
 def _print_comparison(path: Path) -> None:
     """The simulated-against-measured figures of ``comparison.json``, one row a signal."""
-    import json
-
     from rich.markup import escape
     from rich.table import Table
 
+    from pneumaquad.io.run_folder import read_json
+
     if not path.is_file():
         return
-    rows = json.loads(path.read_text(encoding="utf-8")).get("signals", [])
+    rows = read_json(path).get("signals", [])
     table = Table(title="simulated against measured")
     for header in ("signal", "RMSE", "RMSE [% of range]", "largest error", "lag [s]"):
         table.add_column(escape(header), justify="left" if header == "signal" else "right")

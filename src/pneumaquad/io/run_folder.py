@@ -44,8 +44,8 @@ __all__ = [
     "PARAMETERS_NAME", "PARQUET_NAME", "PROFILE_NAME", "SUMMARY_NAME", "TIMING_NAME",
     "TRAJECTORY_NAME",
     "RunFolder", "RunFolderError", "RunFolderVersionError", "RunFolderWriter", "RunRecorder",
-    "create_run_folder", "detect_run_kind", "json_text", "jsonable", "read_recording",
-    "read_run", "read_run_folder", "read_summary", "write_json",
+    "create_run_folder", "detect_run_kind", "json_text", "jsonable", "read_json",
+    "read_recording", "read_run", "read_run_folder", "read_summary", "write_json",
 ]
 
 #: Version of the layout below, written into every summary under :data:`FORMAT_KEY`.
@@ -193,6 +193,17 @@ def _read_json(file: Path) -> dict[str, Any]:
     if not isinstance(document, dict):
         raise RunFolderError(f"{file} should hold a JSON object, not {type(document).__name__}")
     return document
+
+
+def read_json(path: Path) -> dict[str, Any]:
+    """A JSON object written by :func:`write_json` (a report's ``comparison.json``, say).
+
+    Raises
+    ------
+    RunFolderError
+        For a file that is not valid JSON or not an object.
+    """
+    return _read_json(Path(path))
 
 
 def _format_of(summary: Mapping[str, Any], file: Path) -> int:
