@@ -109,8 +109,10 @@ class ConsoleApp:
         self.lock = threading.RLock()
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.server.scene.set_up_direction("+z")
-        self.server.initial_camera.position = (1.1, -1.3, 0.9)
-        self.server.initial_camera.look_at = (0.0, 0.0, 0.25)
+        # from the robot's right and behind, aimed past it, so that the robot sits left of
+        # the control panel and the block ahead of it (environment.block_position) shows
+        self.server.initial_camera.position = (-0.4, -2.0, 1.2)
+        self.server.initial_camera.look_at = (0.7, 0.0, 0.15)
         self.scene: RobotScene | None = None
         self.teleop: FootTeleoperation | None = None
         self.replay: ReplayRun | None = None
