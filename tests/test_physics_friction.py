@@ -46,13 +46,17 @@ def test_force_equals_the_plain_law_and_the_combined_form() -> None:
         assert force == plain
 
 
-def test_combined_slope_equals_the_separate_slope() -> None:
+def test_slope_equals_the_sech_form_and_friction_damping_takes_it() -> None:
+    """The slope written with (1 - t)(1 + t) equals g·k·sech²(k·v) + Cv (clipped at 0) to
+    rounding; friction_damping gives the same number."""
     fs, fc, cv, vs, i, k = LAW
     for v in VELOCITIES:
         _, slope = stribeck_tanh_force_and_slope(v, *LAW)
-        separate = friction_damping(FRICTION_STRIBECK_TANH, v, fs, fc, cv, vs, i, k, 0.0, 0.0,
-                                    0.0, 0.0)
-        assert slope == pytest.approx(separate, rel=1e-12, abs=1e-9)
+        g = fc + (fs - fc) * math.exp(-((abs(v) / vs) ** i))
+        sech = 1.0 / math.cosh(min(abs(k * v), 300.0))
+        assert slope == pytest.approx(max(g * k * sech * sech + cv, 0.0), rel=1e-12, abs=1e-9)
+        assert friction_damping(FRICTION_STRIBECK_TANH, v, fs, fc, cv, vs, i, k, 0.0, 0.0,
+                                0.0, 0.0) == slope
 
 
 def test_slope_is_the_derivative_where_the_law_rises() -> None:

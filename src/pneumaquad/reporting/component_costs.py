@@ -100,7 +100,8 @@ def _friction_loop(p, velocities):
 
 @njit(cache=False)
 def _friction_apart_loop(p, velocities):
-    """Force and slope evaluated apart: the substep's form before they were combined."""
+    """Force and slope asked for apart (``friction_of`` and ``friction_slope_of``): the
+    Stribeck curve and the tanh evaluated twice."""
     total = 0.0
     for v in velocities:
         total += friction_of(p, v, 0.0) + friction_slope_of(p, v, 0.0)
@@ -157,5 +158,5 @@ def component_costs(setup: RigSetup | None = None, repeats: int = 15) -> list[Co
         ComponentCost("Stribeck-tanh force and slope apart -> together",
                       ns(lambda: _friction_apart_loop(row, velocities)),
                       ns(lambda: _friction_loop(row, velocities)), substeps,
-                      "2 exp, 2 pow, tanh, cosh -> exp, pow, tanh"),
+                      "2 exp, 2 pow, 2 tanh -> exp, pow, tanh"),
     ]

@@ -99,10 +99,11 @@ def stribeck_tanh_force(
     Returns
     -------
     float
-        Friction force [N].
+        Friction force [N] (:func:`stribeck_tanh_force_and_slope`'s).
     """
-    g = stribeck_curve(velocity, static_force, coulomb_force, stribeck_velocity, stribeck_exponent)
-    return g * saturating_tanh(tanh_coefficient * velocity) + viscous_coefficient * velocity
+    return stribeck_tanh_force_and_slope(velocity, static_force, coulomb_force,
+                                         viscous_coefficient, stribeck_velocity,
+                                         stribeck_exponent, tanh_coefficient)[0]
 
 
 @compiled
@@ -116,16 +117,15 @@ def stribeck_tanh_force_and_slope(
     tanh_coefficient: float,
 ) -> tuple[float, float]:
     """Stribeck-tanh friction of eq 4.2.6 and its dissipative slope, sharing one Stribeck
-    curve and one tanh.
+    curve and one tanh: the one form of the law (:func:`stribeck_tanh_force` and
+    :func:`friction_damping` take their part of it).
 
-    The force is :func:`stribeck_tanh_force`'s, bit for bit; the slope is
+    The force is g(v)·tanh(k_tanh·v) + Cv·v; the slope is
     g(v)·k_tanh·(1 - tanh²(k_tanh·v)) + Cv clipped at zero, with 1 - tanh² written as
     (1 - t)(1 + t), which is exact to rounding where t is close to ±1 (the falling branch
-    of the Stribeck curve left explicit, as :func:`friction_damping`). One exponential,
-    one power and one tanh instead of the two exponentials, two powers, a tanh and a cosh
-    of the force and the slope evaluated apart, and for a moving piston neither the
-    exponential nor the tanh where their values are exactly 0 and ±1
-    (:func:`stribeck_curve`, :func:`saturating_tanh`).
+    of the Stribeck curve left explicit). One exponential, one power and one tanh for
+    both, and for a moving piston neither the exponential nor the tanh where their values
+    are exactly 0 and ±1 (:func:`stribeck_curve`, :func:`saturating_tanh`).
 
     Parameters
     ----------
@@ -326,11 +326,9 @@ def friction_damping(
     if model == FRICTION_VISCOUS:
         return damping_coefficient
     if model == FRICTION_STRIBECK_TANH:
-        g = stribeck_curve(
-            velocity, static_force, coulomb_force, stribeck_velocity, stribeck_exponent
-        )
-        sech = 1.0 / math.cosh(min(abs(tanh_coefficient * velocity), 300.0))
-        return max(g * tanh_coefficient * sech * sech + viscous_coefficient, 0.0)
+        return stribeck_tanh_force_and_slope(velocity, static_force, coulomb_force,
+                                             viscous_coefficient, stribeck_velocity,
+                                             stribeck_exponent, tanh_coefficient)[1]
     if model == FRICTION_LUGRE:
         g = stribeck_curve(
             velocity, static_force, coulomb_force, stribeck_velocity, stribeck_exponent
