@@ -161,7 +161,7 @@ def test_only_the_run_folder_module_names_the_files() -> None:
             if (isinstance(node, ast.Attribute) and node.attr in ("load", "loads", "dump", "dumps")
                     and isinstance(node.value, ast.Name) and node.value.id == "json"):
                 offenders.append(f"{path.relative_to(PACKAGE)}:{node.lineno} json.{node.attr}")
-    allowed = {"demo/reports.py", "reporting/cost_report.py",  # report files, not run folders
+    allowed = {"reporting/cost_report.py",  # report files, not run folders
                "robot/video_worker.py",  # messages on the video worker's pipes, not files
                "interop/fmu_model.py"}  # the resources inside an FMU, not a run folder
     assert [o for o in offenders if o.split(":")[0] not in allowed] == []

@@ -8,7 +8,7 @@ minute and a half on one core.
     python docs/examples/thesis_calibration.py
 """
 
-from pneumaquad.validation.calibration import GAIN_KEYS, calibrate_thesis_controllers
+from pneumaquad.validation.calibration import GAIN_FIELDS, calibrate_thesis_controllers
 
 
 def main() -> None:
@@ -17,7 +17,7 @@ def main() -> None:
         factors = ", ".join(f"{name} {value:.4g}" for name, value in found.factors.items())
         misses = ", ".join(f"{100 * miss:+.1f} %" for miss in found.residuals) or "-"
         print(f"{table}  # factors: {factors}; target misses: {misses}")
-        for (key, unit), value in zip(GAIN_KEYS, found.gains, strict=True):
+        for (key, unit), value in zip(GAIN_FIELDS, found.gains, strict=True):
             print(f'{key} = "{value:.4g} {unit}"')
         print()
 

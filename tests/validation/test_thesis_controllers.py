@@ -8,7 +8,7 @@ import pytest
 
 from pneumaquad.params import load_rig, load_robot
 from pneumaquad.validation.calibration import (
-    GAIN_KEYS,
+    GAIN_FIELDS,
     THESIS_ALPHA_GAIN_SCALE,
     calibrate_thesis_controllers,
 )
@@ -84,6 +84,6 @@ def test_calibration_rederives_the_shipped_gains() -> None:
     shipped = {"rig": rig.controller, "alpha": robot.controller.alpha,
                "beta": robot.controller.beta, "gamma": robot.controller.gamma}
     for found in calibrate_thesis_controllers():
-        expected = [getattr(shipped[found.controller], key) for key, _ in GAIN_KEYS]
+        expected = [getattr(shipped[found.controller], key) for key, _ in GAIN_FIELDS]
         np.testing.assert_allclose(found.gains, expected, rtol=0.02,
                                    err_msg=found.controller)

@@ -109,7 +109,9 @@ def report_command(
     except REPORT_ERRORS as error:
         _fail(error)
     if measured is not None:
-        _print_comparison(path.parent / "comparison.json")
+        from pneumaquad.reporting.sections import COMPARISON_NAME
+
+        _print_comparison(path.parent / COMPARISON_NAME)
     console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)
 
 

@@ -14,17 +14,18 @@
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 
+from pneumaquad.io.run_folder import read_json
 from pneumaquad.params import load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH as INCH
 from pneumaquad.params.conversions import PASCAL_PER_PSI as PSI
 from pneumaquad.reporting import build_run_report
+from pneumaquad.reporting.sections import COMPARISON_NAME
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import simulate_rig
 
@@ -212,7 +213,7 @@ def _measured_comparison(folder: Path, report: Report) -> None:
                                        with_reference=True)
     page = build_run_report(folder / "step-train", measured=csv, mapping=mapping)
     figures: dict[str, Any] = {"report": str(page.relative_to(folder))}
-    comparison = json.loads((page.parent / "comparison.json").read_text(encoding="utf-8"))
+    comparison = read_json(page.parent / COMPARISON_NAME)
     for row in comparison["signals"]:
         name = row["signal"]
         figures[f"{name}: RMSE"] = row["rmse"]

@@ -29,6 +29,7 @@ from .parameters import actuator_rows, flatten_summary, rig_parameter_rows, robo
 from .run_folder import LoadedRun
 
 __all__ = [
+    "COMPARISON_NAME",
     "add_comparison",
     "add_model_curves",
     "add_parameters",
@@ -38,6 +39,9 @@ __all__ = [
     "commanded_joints",
     "velocity_limit",
 ]
+
+#: The figures of a report against measured data, beside its report.html.
+COMPARISON_NAME = "comparison.json"
 
 _PARAMETER_HEADERS = ("group", "parameter", "value (SI)", "unit", "thesis units")
 
@@ -277,7 +281,7 @@ def add_comparison(
         "time offset [s]": comparison.time_offset,
         "source": source,
     }
-    write_json(folder / "comparison.json", document)
+    write_json(folder / COMPARISON_NAME, document)
 
 
 def add_network_timing(page: HtmlPage, run: LoadedRun) -> None:

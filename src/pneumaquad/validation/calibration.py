@@ -33,6 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from pneumaquad.analysis.fits import parameter_name_and_unit
+from pneumaquad.identification.controller_data import GAIN_KEYS
 from pneumaquad.params import load_rig
 from pneumaquad.params.schema import RigSetup
 from pneumaquad.validation.leg_loop import JointFigures, foot_cycle_figures, joint_figures
@@ -48,7 +50,7 @@ from pneumaquad.validation.rig_loop import rig_loop_figures
 __all__ = [
     "ALPHA_SCALE_BRACKET",
     "BETA_INTEGRAL_FACTORS",
-    "GAIN_KEYS",
+    "GAIN_FIELDS",
     "LIMIT_CYCLE_OSCILLATION",
     "THESIS_ALPHA_GAIN_SCALE",
     "CalibratedGains",
@@ -61,9 +63,9 @@ __all__ = [
     "gain_overrides",
 ]
 
-#: The PID gains the calibration scales, and their units as the parameter files write them.
-GAIN_KEYS = (("proportional_gain", "V/m"), ("integral_gain", "V/(m*s)"),
-             ("derivative_gain", "V*s/m"))
+#: The PID gains the calibration scales, as (key, unit) of the parameter files: the
+#: controller fit's gains (:data:`pneumaquad.identification.controller_data.GAIN_KEYS`).
+GAIN_FIELDS = tuple(parameter_name_and_unit(key) for key in GAIN_KEYS)
 #: Integral factors tried for beta (:func:`calibrate_beta`) [-].
 BETA_INTEGRAL_FACTORS = (0.1, 0.15, 0.22, 0.33, 0.5)
 #: The thesis's reduced alpha gain (5.5.2.4, l. 1135) [-].
@@ -104,11 +106,11 @@ def gain_overrides(section: str, gains: Sequence[float]) -> list[str]:
     """``--set`` overrides of the three PID gains of ``section`` (e.g. ``controller`` or
     ``controller.beta``), SI values with units."""
     return [f'{section}.{key}="{float(value)!r} {unit}"'
-            for (key, unit), value in zip(GAIN_KEYS, gains, strict=True)]
+            for (key, unit), value in zip(GAIN_FIELDS, gains, strict=True)]
 
 
 def _tuned(table) -> np.ndarray:
-    return np.array([getattr(table, key) for key, _ in GAIN_KEYS])
+    return np.array([getattr(table, key) for key, _ in GAIN_FIELDS])
 
 
 def _solve(residuals: Callable[[np.ndarray], np.ndarray], start: Sequence[float],

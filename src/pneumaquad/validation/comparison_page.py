@@ -17,6 +17,7 @@ from pneumaquad import __version__
 from pneumaquad.params import load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH
 from pneumaquad.reporting.cost_report import cost_table_markdown
+from pneumaquad.reporting.html import format_value
 from pneumaquad.reporting.plotting import DPI, plt
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import simulate_rigs
@@ -38,12 +39,6 @@ RIG_FIGURE = "images/thesis-rig-loop.png"
 WALKING_FIGURE = "images/thesis-alpha-walking.png"
 
 
-def _number(value: float, digits: int = 3) -> str:
-    if not math.isfinite(value):
-        return "n/a"
-    return f"{value:.{digits}g}"
-
-
 def _summary_table(comparison: Comparison) -> list[str]:
     labels = [s.label for s in CONTROLLER_SETS]
     per_set = {label: targets_of(comparison.sets[label]) for label in labels}
@@ -55,7 +50,7 @@ def _summary_table(comparison: Comparison) -> list[str]:
             target = per_set[label][index]
             mark = "met" if target.met else "missed"
             unit = "" if target.unit == "-" else f" {target.unit}"
-            shown = target.shown or f"{_number(target.value)}{unit}"
+            shown = target.shown or f"{format_value(target.value, 3)}{unit}"
             cells.append(f"{shown} ({mark})")
         lines.append(f"| {row.claim} | {row.published} | {row.target} | " + " | ".join(cells)
                      + " |")

@@ -28,7 +28,7 @@ import numpy as np
 
 from pneumaquad.analysis.filters import lowpass_filter
 from pneumaquad.analysis.fits import fit_first_order
-from pneumaquad.analysis.metrics import lag
+from pneumaquad.analysis.metrics import lag, rmse
 from pneumaquad.analysis.segmentation import find_steps, metrics_per_step
 from pneumaquad.params import load_robot
 from pneumaquad.robot.builder import build_robot
@@ -132,8 +132,9 @@ def _run_leg_signal(params: str, overrides: Sequence[str], joint: str,
     return time[kept], angle, reference
 
 
-def _rmse_degrees(error: np.ndarray) -> float:
-    return float(np.degrees(np.sqrt(np.mean(error**2))))
+def _rmse_degrees(estimate: np.ndarray, reference: np.ndarray) -> float:
+    """:func:`pneumaquad.analysis.metrics.rmse` of two angle series [rad], in degrees."""
+    return float(np.degrees(rmse(estimate, reference)))
 
 
 def joint_figures(joint: str, params: str = "crr-quadruped",
@@ -152,7 +153,7 @@ def joint_figures(joint: str, params: str = "crr-quadruped",
     time, angle, reference = _run_leg_signal(params, overrides, joint, "fast-sine")
     measured = time >= SETTLE + 2.0  # after the first 0.5 Hz cycle
     sine_lag = lag(time[measured], angle[measured], reference[measured], max_lag=0.5)
-    sine_rmse = _rmse_degrees(angle - reference)
+    sine_rmse = _rmse_degrees(angle, reference)
     time, angle, reference = _run_leg_signal(params, overrides, joint, "steps")
     steps = metrics_per_step(time, angle, reference, STEP_THRESHOLD)
     constants = []
@@ -167,7 +168,7 @@ def joint_figures(joint: str, params: str = "crr-quadruped",
         rise_time=float(np.nanmean([s["rise time [s]"] for s in steps])),
         time_constant=float(np.mean(constants)),
         overshoot=float(np.nanmean([s["overshoot [%]"] for s in steps])),
-        step_rmse=_rmse_degrees(angle - reference),
+        step_rmse=_rmse_degrees(angle, reference),
     )
 
 
@@ -202,10 +203,10 @@ def foot_cycle_figures_of(time: np.ndarray, tracks: dict[str, tuple[np.ndarray, 
         figures.append(FootCycleFigures(
             joint=joint,
             gain_scale=gain_scale,
-            rmse=_rmse_degrees(error),
+            rmse=_rmse_degrees(angle, reference),
             lag=delay,
-            shifted_rmse=_rmse_degrees(angle - shifted),
-            oscillation=_rmse_degrees(error - smooth),
+            shifted_rmse=_rmse_degrees(angle, shifted),
+            oscillation=_rmse_degrees(error, smooth),
         ))
     return figures
 
