@@ -43,9 +43,27 @@ def test_report_run_with_measured_data(rig_run: Path, tmp_path: Path) -> None:
     )
     assert result.exit_code == 0, result.output
     assert (out / "comparison.json").is_file()
-    # the figures are printed too, units kept
+    # the figures are printed too, in the report's units (SI: errors in mm and kPa)
     assert "simulated against measured" in result.output
-    assert "position [m]" in result.output and "lag [s]" in result.output
+    table = {line.split("│")[1].strip(): line.split("│")[2].strip()
+             for line in result.output.splitlines() if line.count("│") > 3}
+    assert table["position"] == "mm" and table["cap pressure"] == "kPa"
+    assert "lag [s]" in result.output
+
+
+def test_report_units_us_and_unknown_units(rig_run: Path, tmp_path: Path) -> None:
+    csv, mapping = write_measured_csv(read_recording(rig_run), tmp_path / "lab", shift=0.01)
+    out = tmp_path / "report"
+    result = runner.invoke(app, ["report", str(rig_run), "--measured", str(csv), "--mapping",
+                                 str(mapping), "--units", "us", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    table = {line.split("│")[1].strip(): line.split("│")[2].strip()
+             for line in result.output.splitlines() if line.count("│") > 3}
+    assert table["position"] == "in" and table["rod pressure"] == "psi"
+    assert "psia" in (out / "report.html").read_text(encoding="utf-8")
+    result = runner.invoke(app, ["report", str(rig_run), "--units", "furlongs"])
+    assert result.exit_code == 2
+    assert "'furlongs': expected one of si, us" in " ".join(result.output.split())
 
 
 def test_missing_folder_exits_2_naming_it(tmp_path: Path) -> None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import matplotlib
 import numpy as np
 
+from pneumaquad.reporting.display_units import display_units
 from pneumaquad.reporting.plotting import plot_difference, plot_held_pressures, plt
 from pneumaquad.reporting.robot_plots import MIN_ANGLE_SPAN, _at_least_span
 
@@ -24,7 +25,8 @@ def test_difference_plot_draws_the_difference(tmp_path) -> None:
     original = plt.close
     plt.close = lambda fig=None: figures.append(fig)  # keep the figure to look at
     try:
-        path = plot_difference(_recording(2.54e-5), _recording(0.0), tmp_path / "d.png")
+        path = plot_difference(_recording(2.54e-5), _recording(0.0), tmp_path / "d.png",
+                               units=display_units("us"))
     finally:
         plt.close = original
     assert path.stat().st_size > 5_000
@@ -40,7 +42,7 @@ def test_held_pressures_draw_their_targets(tmp_path) -> None:
     plt.close = lambda fig=None: figures.append(fig)
     try:
         plot_held_pressures({"5 V": _recording(0.0)}, {"5 V": (3.1e5, 1.9e5)},
-                            tmp_path / "h.png")
+                            tmp_path / "h.png", units=display_units("us"))
     finally:
         plt.close = original
     (axis,) = figures[0].axes

@@ -10,6 +10,7 @@ import pytest
 
 from pneumaquad.io.run_folder import RunFolderError, detect_run_kind
 from pneumaquad.reporting import build_run_report, load_run_folder
+from pneumaquad.reporting.display_units import SI
 from pneumaquad.reporting.html import format_value
 from pneumaquad.reporting.parameters import flatten_summary
 from pneumaquad.reporting.run_folder import ReportError
@@ -22,9 +23,10 @@ def _images(text: str) -> list[str]:
 
 
 def _metric_cells(summary: dict) -> list[str]:
+    """The summary's numbers as an SI report shows them (pressures in kPa)."""
     return [
         format_value(value, 6)
-        for _, value in flatten_summary(summary)
+        for _, value in SI.rows(flatten_summary(summary))
         if isinstance(value, (int, float)) and not isinstance(value, bool)
     ]
 
@@ -54,8 +56,9 @@ def test_rig_report_holds_parameters_and_every_metric(rig_run: Path, rig_report:
     summary = json.loads((rig_run / "summary.json").read_text())
     for cell in _metric_cells(summary):
         assert f">{cell}<" in text
-    assert "65 psia (50.3 psig)" in text  # supply, App. B.1.1
-    assert "1.75 in" in text  # stroke
+    # SI by default (tests/reporting/test_display_units.py: both systems); supply App. B.1.1
+    assert "<td>supply pressure, gauge</td><td class='num'>346.81</td>" in text
+    assert "<td>stroke</td><td class='num'>0.04445</td><td>m</td>" in text
     assert "stribeck_tanh" in text and "underlapped" in text
     assert "Kp" in text
 

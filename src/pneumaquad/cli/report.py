@@ -40,6 +40,15 @@ def _fail(error: Exception) -> None:
     raise typer.Exit(2)
 
 
+def _unit_system(value: str) -> str:
+    """Typer callback of ``--units``: one of the report unit systems (lower case)."""
+    from pneumaquad.reporting.display_units import UNIT_SYSTEMS
+
+    if value.lower() not in UNIT_SYSTEMS:
+        raise typer.BadParameter(f"{value!r}: expected one of {', '.join(UNIT_SYSTEMS)}")
+    return value.lower()
+
+
 def report_command(
     run: Annotated[
         Path | None, typer.Argument(help="Run folder of a rig or robot experiment.")
@@ -60,6 +69,12 @@ def report_command(
                                                   lower_inclusive=True)),
                      parser=number_in("s"), metavar="QUANTITY"),
     ] = 0.0,
+    units: Annotated[
+        str,
+        typer.Option("--units", help="Units of every figure, table and text of the report: "
+                     "si (m, mm, kPa, N) or us (the thesis's in, psia, psig, lbf).",
+                     callback=_unit_system, metavar="si|us"),
+    ] = "si",
     output: Annotated[
         Path | None,
         typer.Option("--output", "-o", help="Report folder (default RUN/report, or "
@@ -105,32 +120,39 @@ def report_command(
 
     try:
         with progress_bar("report") as update:
-            path = build_run_report(run, output, measured, mapping, time_offset, update)
+            path = build_run_report(run, output, measured, mapping, time_offset, update,
+                                    units)
     except REPORT_ERRORS as error:
         _fail(error)
     if measured is not None:
         from pneumaquad.reporting.sections import COMPARISON_NAME
 
-        _print_comparison(path.parent / COMPARISON_NAME)
+        _print_comparison(path.parent / COMPARISON_NAME, units)
     console.print(f"report: [bold]{path}[/bold]", soft_wrap=True)
 
 
-def _print_comparison(path: Path) -> None:
-    """The simulated-against-measured figures of ``comparison.json``, one row a signal."""
+def _print_comparison(path: Path, system: str) -> None:
+    """The simulated-against-measured figures of ``comparison.json`` (SI), one row a
+    signal, in the report's units."""
     from rich.markup import escape
     from rich.table import Table
 
     from pneumaquad.io.run_folder import read_json
+    from pneumaquad.reporting.display_units import display_units
 
     if not path.is_file():
         return
+    units = display_units(system)
     rows = read_json(path).get("signals", [])
     table = Table(title="simulated against measured")
-    for header in ("signal", "RMSE", "RMSE [% of range]", "largest error", "lag [s]"):
+    for header in ("signal", "unit", "RMSE", "RMSE [% of range]", "largest error", "lag [s]"):
         table.add_column(escape(header), justify="left" if header == "signal" else "right")
     for row in rows:  # units in brackets are text, not markup
-        table.add_row(escape(row["signal"]), f"{row['rmse']:.4g}", f"{row['rmse_percent']:.3g}",
-                      f"{row['max_abs_error']:.4g}", f"{row['lag']:+.4f}")
+        name, _, si_unit = row["signal"].rpartition(" [")
+        rmse, unit = units.error(row["rmse"], si_unit.rstrip("]"))
+        largest, _ = units.error(row["max_abs_error"], si_unit.rstrip("]"))
+        table.add_row(escape(name), escape(unit), f"{rmse:.4g}", f"{row['rmse_percent']:.3g}",
+                      f"{largest:.4g}", f"{row['lag']:+.4f}")
     console.print(table)
 
 

@@ -25,6 +25,7 @@ from pneumaquad.params import load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH as INCH
 from pneumaquad.params.conversions import PASCAL_PER_PSI as PSI
 from pneumaquad.reporting import build_run_report
+from pneumaquad.reporting.display_units import DisplayUnits
 from pneumaquad.reporting.sections import COMPARISON_NAME
 from pneumaquad.rig import signals
 from pneumaquad.rig.simulate import simulate_rig
@@ -47,6 +48,8 @@ LAB_STEP_VOLTAGES = (2.25, 3.25, 4.0, 4.5, 4.9, 5.25, 5.6, 6.0, 6.5, 7.25, 8.25)
 
 
 class Report(Protocol):
+    units: DisplayUnits
+
     def add(self, title: str, text: str, figure: Path, figures: dict[str, Any]) -> None: ...
 
 
@@ -211,14 +214,16 @@ def _measured_comparison(folder: Path, report: Report) -> None:
     lab = simulate_rig(setup, reference, closed_loop=True).recording
     csv, mapping = write_lab_style_csv(lab, folder / "lab-data", delay=0.02, with_command=True,
                                        with_reference=True)
-    page = build_run_report(folder / "step-train", measured=csv, mapping=mapping)
+    page = build_run_report(folder / "step-train", measured=csv, mapping=mapping,
+                            units=report.units)
     figures: dict[str, Any] = {"report": str(page.relative_to(folder))}
     comparison = read_json(page.parent / COMPARISON_NAME)
-    for row in comparison["signals"]:
-        name = row["signal"]
-        figures[f"{name}: RMSE"] = row["rmse"]
-        figures[f"{name}: RMSE [% of range]"] = row["rmse_percent"]
-        figures[f"{name}: lag [s]"] = row["lag"]
+    for row in comparison["signals"]:  # SI: positions in m, pressures in Pa
+        name, _, unit = row["signal"].rpartition(" [")
+        unit, scale = ("mm", 1e3) if unit == "m]" else (unit.rstrip("]"), 1.0)
+        figures[f"{name} RMSE [{unit}]"] = row["rmse"] * scale
+        figures[f"{name} RMSE [% of range]"] = row["rmse_percent"]
+        figures[f"{name} lag [s]"] = row["lag"]
     report.add(
         "Simulation against (stand-in) lab data",
         "The closed-loop step train compared with 'measured' data: the same experiment "
@@ -238,7 +243,7 @@ def _identification_data(folder: Path, report: Report) -> None:
 
 
 def _robot_report(folder: Path, report: Report) -> None:
-    page = build_run_report(folder / "robot-stand")
+    page = build_run_report(folder / "robot-stand", units=report.units)
     report.add(
         "Report of a robot run",
         "`pneumaquad report robot-stand`: parameters, metrics, joint and body plots, "

@@ -4,7 +4,9 @@
 (spacer) test inside the underlap band, closed-loop tracking, the slow-sine stiction
 comparison (Stribeck-tanh creeps, LuGre sticks), the fixed-step integrator against the
 Radau reference, and a finite tank running down. Each experiment gets its own run folder;
-``report.md`` and ``report.html`` (figures embedded) summarise them.
+``report.md`` and ``report.html`` (figures embedded) summarise them, in SI units: the
+sections give their figures in SI (keys ``"quantity [unit]"``) and draw in the report's
+display units (:mod:`pneumaquad.reporting.display_units`), as do the sub-reports.
 """
 
 from collections.abc import Callable
@@ -19,7 +21,7 @@ from pneumaquad.demo.stiction_plot import plot_stiction_comparison
 from pneumaquad.io.run_folder import SUMMARY_NAME, write_json
 from pneumaquad.params import load_rig
 from pneumaquad.params.conversions import METRE_PER_INCH as INCH
-from pneumaquad.params.conversions import PASCAL_PER_PSI as PSI
+from pneumaquad.reporting.display_units import SI, DisplayUnits
 from pneumaquad.reporting.html import HtmlPage
 from pneumaquad.reporting.plotting import (
     plot_comparison,
@@ -37,10 +39,16 @@ def _rms(a: np.ndarray, b: np.ndarray) -> float:
 
 
 class DemoReport:
-    """Collects sections (text, figure, key figures) and writes report.md/report.html."""
+    """Collects sections (text, figure, key figures) and writes report.md/report.html.
 
-    def __init__(self, folder: Path) -> None:
+    Sections give their key figures in SI (``"quantity [unit]"`` keys, as summary.json
+    does); the pages show them in ``units`` (the demo's: SI, pressures in kPa), and the
+    figures are drawn in the same units (:attr:`units`).
+    """
+
+    def __init__(self, folder: Path, units: DisplayUnits = SI) -> None:
         self.folder = folder
+        self.units = units
         self.sections: list[dict[str, Any]] = []
 
     def add(self, title: str, text: str, figure: Path, figures: dict[str, Any]) -> None:
@@ -68,12 +76,12 @@ class DemoReport:
                 "| figure | value |",
                 "|---|---|",
             ]
-            lines += [f"| {key} | {_format(value)} |" for key, value in section["figures"].items()]
+            shown = self.units.rows(list(section["figures"].items()))
+            lines += [f"| {key} | {_format(value)} |" for key, value in shown]
             lines += ["", f"![{section['title']}]({relative.as_posix()})", ""]
             page.heading(section["title"])
             page.paragraph(section["text"])
-            page.table(["figure", "value"],
-                       [(key, _format(value)) for key, value in section["figures"].items()])
+            page.table(["figure", "value"], [(key, _format(value)) for key, value in shown])
             page.figure(figure, section["title"])
         (self.folder / "report.md").write_text("\n".join(lines), encoding="utf-8")
         page.write(self.folder / "report.html")
@@ -146,6 +154,7 @@ def _open_loop_steps(folder: Path, report: DemoReport) -> None:
         recordings,
         folder / "open-loop-steps.png",
         "Open-loop steps (5 s opposite saturation, then the step)",
+        report.units,
     )
     report.add(
         "Open-loop steps",
@@ -192,14 +201,15 @@ def _spacer(folder: Path, report: DemoReport) -> None:
                     port.low_pressure_cutoff,
                 )
             )
-            figures[f"{volts} V {label}: settled [psia]"] = recording[column][-1] / PSI
-            figures[f"{volts} V {label}: eq 4.2.7 curve [psia]"] = expected / PSI
+            figures[f"{volts} V {label}: settled [Pa]"] = float(recording[column][-1])
+            figures[f"{volts} V {label}: eq 4.2.7 curve [Pa]"] = expected
             levels.append(expected)
         recordings[f"{volts} V"] = recording
         targets[f"{volts} V"] = tuple(levels)
     path = plot_held_pressures(
         recordings, targets, folder / "spacer.png",
-        "Fixed piston inside the underlap band: chamber pressures and their curves"
+        "Fixed piston inside the underlap band: chamber pressures and their curves",
+        report.units,
     )
     report.add(
         "Fixed piston (spacer)",
@@ -230,7 +240,7 @@ def _tracking(folder: Path, report: DemoReport) -> None:
         ),
     ):
         _result, summary = _run(folder, name, [], builder, True, f"closed-loop {label}")
-        figures[f"{label}: RMSE [in]"] = summary["rmse [m]"] / INCH
+        figures[f"{label}: RMSE [mm]"] = summary["rmse [m]"] * 1e3
         figures[f"{label}: RMSE [% stroke]"] = summary["rmse [% stroke]"]
         figures[f"{label}: lag [s]"] = summary["lag [s]"]
         figures[f"{label}: real-time factor"] = summary["real-time factor"]
@@ -259,8 +269,8 @@ def _stiction(folder: Path, report: DemoReport) -> None:
         speed = np.abs(result.recording["velocity [m/s]"][2000:])
         at_rest = float(np.mean(speed < 1e-5))
         figures[f"{model}: fraction of time at rest (speed < 10 µm/s)"] = at_rest
-        figures[f"{model}: RMSE [in]"] = summary["rmse [m]"] / INCH
-    path = plot_stiction_comparison(recordings, folder / "stiction.png")
+        figures[f"{model}: RMSE [mm]"] = summary["rmse [m]"] * 1e3
+    path = plot_stiction_comparison(recordings, folder / "stiction.png", report.units)
     report.add(
         "Stiction at slow speed",
         "The thesis's stated failure (4.4.2, 5.5.2): with "
@@ -289,17 +299,15 @@ def _reference_solver(folder: Path, report: DemoReport) -> None:
         recordings[integrator] = result.recording
     fixed, radau = recordings["fixed"], recordings["radau"]
     figures = {
-        "position RMSE [in]": _rms(fixed["position [m]"], radau["position [m]"]) / INCH,
-        "cap pressure RMSE [psi]": _rms(fixed["cap pressure [Pa]"], radau["cap pressure [Pa]"])
-        / PSI,
-        "rod pressure RMSE [psi]": _rms(fixed["rod pressure [Pa]"], radau["rod pressure [Pa]"])
-        / PSI,
+        "position RMSE [µm]": _rms(fixed["position [m]"], radau["position [m]"]) * 1e6,
+        "cap pressure RMSE [Pa]": _rms(fixed["cap pressure [Pa]"], radau["cap pressure [Pa]"]),
+        "rod pressure RMSE [Pa]": _rms(fixed["rod pressure [Pa]"], radau["rod pressure [Pa]"]),
     }
     simulation = load_rig("thesis-rig").simulation
     steps = f"{simulation.control_step * 1e3:g} ms, {simulation.substeps} substeps"
     path = plot_difference(
         fixed, radau, folder / "solver.png", ("fixed step", "Radau"),
-        f"Fixed step ({steps}) against the Radau reference",
+        f"Fixed step ({steps}) against the Radau reference", report.units,
     )
     report.add(
         "Fixed step vs adaptive reference",
@@ -335,11 +343,11 @@ def _tank(folder: Path, report: DemoReport) -> None:
         "tank falls below the regulator set point at [s]": (
             float(recording["time [s]"][below[0]]) if below.size else float("nan")
         ),
-        "final tank pressure [psia]": float(recording["tank pressure [Pa]"][-1]) / PSI,
-        "RMSE [in]": summary["rmse [m]"] / INCH,
+        "final tank pressure [Pa]": float(recording["tank pressure [Pa]"][-1]),
+        "RMSE [mm]": summary["rmse [m]"] * 1e3,
     }
     path = plot_tank_run(recording, supply, folder / "tank-sine" / "tank.png",
-                         "1 Hz sine from a 0.5 L tank at 8 bar")
+                         "1 Hz sine from a 0.5 L tank at 8 bar", report.units)
     report.add(
         "Finite tank supply",
         "A closed-loop 1 Hz sine drawn from a small tank "

@@ -9,6 +9,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from pneumaquad.params import load_robot
+from pneumaquad.reporting.display_units import DisplayUnits
 from pneumaquad.reporting.robot_plots import plot_body, plot_joints
 from pneumaquad.robot.builder import build_robot
 from pneumaquad.robot.experiment import run_phases
@@ -19,6 +20,8 @@ __all__ = ["ROBOT_SECTIONS"]
 
 
 class Report(Protocol):
+    units: DisplayUnits
+
     def add(self, title: str, text: str, figure: Path, figures: dict[str, Any]) -> None: ...
 
 
@@ -33,7 +36,7 @@ def _stand(folder: Path, report: Report) -> None:
                      "quadruped: stand up, hold, body commands")
     recording = run.recording
     plot_body(recording, simulation.robot.legs, folder / "robot-stand" / "body.png",
-              "Quadruped standing up on 12 pneumatic joints")
+              "Quadruped standing up on 12 pneumatic joints", report.units)
     figure = folder / "robot-stand" / "body.png"
     try:
         from pneumaquad.robot.video import RenderingUnavailableError, render_run_video
@@ -83,7 +86,8 @@ def _leg_steps(folder: Path, report: Report) -> None:
     run = run_phases(simulation, leg_validation_phases(simulation, "gamma", "steps"),
                      folder / name, "front-right gamma: step train")
     joints = [n for n in simulation.robot.joint_names if n.startswith("front_right")]
-    plot_joints(run.recording, joints, folder / name / "joints.png", "Gamma step train")
+    plot_joints(run.recording, joints, folder / name / "joints.png", "Gamma step train",
+                report.units)
     report.add(
         "Leg validation: gamma step train (thesis 5.5.2.1, Fig. 38)",
         "Fixed thorax; alpha and beta driven to full extension open loop, then gamma "
@@ -103,7 +107,7 @@ def _foot_cycle(folder: Path, report: Report) -> None:
                          f"foot cycle, alpha gain x{scale:g}")
         joints = [n for n in simulation.robot.joint_names if n.startswith("front_right")]
         plot_joints(run.recording, joints, folder / name / "joints.png",
-                    f"Foot cycle, slow/medium/fast, alpha gain x{scale:g}")
+                    f"Foot cycle, slow/medium/fast, alpha gain x{scale:g}", report.units)
         for joint in joints:
             key = f"{joint.split('_')[-1]} rmse [deg], alpha gain x{scale:g}"
             figures[key] = run.summary["angle rmse [deg]"][joint]

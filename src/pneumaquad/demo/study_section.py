@@ -10,6 +10,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from pneumaquad.params.conversions import NEWTON_PER_LBF
+from pneumaquad.reporting.display_units import DisplayUnits
 from pneumaquad.studies import parse_study, read_results, run_study
 from pneumaquad.studies.plots import distribution_png
 from pneumaquad.studies.report import write_study_report
@@ -46,6 +48,8 @@ high = "3.5 lbf"
 
 
 class Report(Protocol):
+    units: DisplayUnits
+
     def add(self, title: str, text: str, figure: Path, figures: dict[str, Any]) -> None: ...
 
 
@@ -59,13 +63,16 @@ def _variability(folder: Path, report: Report) -> None:
     figure = study / "stiction-peak.png"
     figure.write_bytes(distribution_png("stiction peak force [N]", peaks))
     figures: dict[str, Any] = {"cases": run.total, "failed": run.failed}
+    units = report.units
     for name in spec.metrics:
-        low, median, high = np.nanpercentile(np.array(table[name], dtype=float), [5, 50, 95])
-        figures[f"{name}: 5 %, median, 95 %"] = f"{low:.4g}, {median:.4g}, {high:.4g}"
+        spread = np.nanpercentile(np.array(table[name], dtype=float), [5, 50, 95])
+        shown, values = units.key(name, spread)
+        figures[f"{shown}: 5 %, median, 95 %"] = ", ".join(f"{v:.4g}" for v in values)
+    low, high = (units.text(force * NEWTON_PER_LBF, "force", 3) for force in (3.5, 5.0))
     report.add(
         "Study: friction variability of the rig step",
-        "The thesis measured that the stiction of its cylinder varies between 3.5 and "
-        "5.0 lbf and that the Coulomb force scattered (4.2.2.4); this study draws both "
+        f"The thesis measured that the stiction of its cylinder varies between {low} and "
+        f"{high} and that the Coulomb force scattered (4.2.2.4); this study draws both "
         "from that spread for 64 open-loop 6 V steps (Latin hypercube) and collects the "
         "break-away, rise time and stiction peak of each. The study's own report (with "
         "scatter plots and the sensitivity table) is study-thesis-variability/report.html; "

@@ -20,14 +20,8 @@ from pneumaquad.analysis.compare import (
     compare_recordings,
 )
 from pneumaquad.analysis.segmentation import find_steps, metrics_per_step
-from pneumaquad.params.conversions import METRE_PER_INCH, PASCAL_PER_PSI
-from pneumaquad.reporting.plotting import (
-    DPI,
-    metres_to_inches,
-    pascals_to_psi,
-    plot_comparison,
-    plt,
-)
+from pneumaquad.reporting.display_units import SI, DisplayUnits
+from pneumaquad.reporting.plotting import DPI, plot_comparison, plt
 
 from .run_folder import ReportError
 
@@ -47,8 +41,6 @@ COMPARED_SIGNALS = (
     "rod pressure [Pa]",
     "supply pressure [Pa]",
 )
-#: Display unit per SI unit: (name, factor to divide by).
-_DISPLAY = {"m": ("in", METRE_PER_INCH), "Pa": ("psi", PASCAL_PER_PSI)}
 #: Command jump [V] and reference jump [fraction of stroke] that make a step.
 COMMAND_STEP_THRESHOLD = 0.05
 REFERENCE_STEP_FRACTION = 0.01
@@ -161,19 +153,36 @@ def compare_with_measured(
     )
 
 
-def comparison_table_rows(comparisons: list[SignalComparison]) -> list[list[object]]:
-    """Rows (signal, unit, RMSE, RMSE %, max error, lag, τ sim, τ meas) in in / psi."""
+#: Headers of :func:`comparison_table_rows`.
+COMPARISON_HEADERS = (
+    "signal",
+    "unit",
+    "RMSE",
+    "RMSE [% of range]",
+    "max abs error",
+    "lag [s]",
+    "τ simulated [s]",
+    "τ measured [s]",
+)
+
+
+def comparison_table_rows(comparisons: list[SignalComparison],
+                          units: DisplayUnits = SI) -> list[list[object]]:
+    """Rows (signal, unit, RMSE, RMSE %, max error, lag, τ sim, τ meas) in the display
+    units: the errors of a length as a small length, of a pressure as a difference."""
     rows: list[list[object]] = []
     for c in comparisons:
+        name = c.signal[: c.signal.rindex("[")].strip()
         si = c.signal[c.signal.rindex("[") + 1 : -1]
-        unit, factor = _DISPLAY.get(si, (si, 1.0))
+        rmse, unit = units.error(c.rmse, si)
+        largest, _ = units.error(c.max_abs_error, si)
         rows.append(
             [
-                c.signal[: c.signal.rindex("[")].strip(),
+                name,
                 unit,
-                c.rmse / factor,
+                rmse,
                 c.rmse_percent,
-                c.max_abs_error / factor,
+                largest,
                 c.lag,
                 c.simulated_time_constant,
                 c.measured_time_constant,
@@ -188,28 +197,28 @@ def plot_measured_vs_simulated(
     path: Path,
     time_offset: float = 0.0,
     title: str = "",
+    units: DisplayUnits = SI,
 ) -> Path:
-    """Measured and simulated position (in) and pressures (psia) against time."""
+    """Measured and simulated position and (absolute) pressures against time."""
     shifted = dict(measured)
     shifted["time [s]"] = np.asarray(measured["time [s]"], dtype=float) + time_offset
-    return plot_comparison({"measured": shifted, "simulated": simulated}, path, title)
+    return plot_comparison({"measured": shifted, "simulated": simulated}, path, title, units)
 
 
-def plot_errors(comparison: MeasuredComparison, path: Path) -> Path:
-    """Simulated minus measured on the common grid: position (in), pressures (psi)."""
+def plot_errors(comparison: MeasuredComparison, path: Path, units: DisplayUnits = SI) -> Path:
+    """Simulated minus measured on the common grid: position and pressure differences."""
     aligned = comparison.aligned
     names = [c.signal for c in comparison.comparisons]
     fig, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True, layout="constrained")
     for name in names:
         error = aligned.simulated[name] - aligned.measured[name]
         if name == "position [m]":
-            axes[0].plot(aligned.time, metres_to_inches(error), color="C0", lw=1.2)
+            axes[0].plot(aligned.time, units.value(error, "small length"), color="C0", lw=1.2)
         else:
-            axes[1].plot(
-                aligned.time, pascals_to_psi(error), lw=1.2, label=name.removesuffix(" [Pa]")
-            )
-    axes[0].set_ylabel("Position error (in)")
-    axes[1].set_ylabel("Pressure error (psi)")
+            axes[1].plot(aligned.time, units.value(error, "pressure difference"), lw=1.2,
+                         label=name.removesuffix(" [Pa]"))
+    axes[0].set_ylabel(units.axis("Position error", "small length"))
+    axes[1].set_ylabel(units.axis("Pressure error", "pressure difference"))
     axes[1].set_xlabel("Time (s)")
     for ax in axes:
         ax.grid(True, alpha=0.35)

@@ -2,7 +2,8 @@
 
 Each function takes label → actuator parameters (``{"rig": ...}`` or the robot's joint
 types); actuators with equal sub-models share one curve, labelled with all their names.
-Axes are SI with the thesis's units (lbf, in/s, psia, mm²) alongside.
+Axes are in the display units given (:mod:`pneumaquad.reporting.display_units`: SI by
+default, or the thesis's lbf, in/s, psia and in²); voltages in V either way.
 """
 
 from __future__ import annotations
@@ -14,8 +15,8 @@ import numpy as np
 from matplotlib.ticker import MaxNLocator
 
 from pneumaquad.params import ActuatorParameters
-from pneumaquad.params.conversions import NEWTON_PER_LBF
-from pneumaquad.reporting.plotting import DPI, METRE_PER_INCH, PASCAL_PER_PSI, plt
+from pneumaquad.reporting.display_units import SI, DisplayUnits
+from pneumaquad.reporting.plotting import DPI, plt
 
 from .curves import (
     area_curves,
@@ -44,7 +45,8 @@ def _title(label: str) -> str:
 
 
 def plot_friction_curves(
-    actuators: Mapping[str, ActuatorParameters], path: Path, velocity_limit: float = 0.3
+    actuators: Mapping[str, ActuatorParameters], path: Path, velocity_limit: float = 0.3,
+    units: DisplayUnits = SI,
 ) -> Path:
     """Friction force against velocity of each configured model (thesis Fig. 15–16).
 
@@ -58,6 +60,8 @@ def plot_friction_curves(
         Output PNG.
     velocity_limit : float
         Half width of the full-range panel [m/s].
+    units : DisplayUnits
+        Display units of force and velocity.
     """
     groups = group_equal({label: a.friction for label, a in actuators.items()})
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.3), layout="constrained")
@@ -67,20 +71,15 @@ def plot_friction_curves(
         for index, (label, friction) in enumerate(groups):
             force = friction_curve(friction, velocity)
             ax.plot(
-                velocity, force, color=f"C{index}", lw=1.5, label=f"{friction.model}{_title(label)}"
+                units.value(velocity, "velocity"), units.value(force, "force"),
+                color=f"C{index}", lw=1.5, label=f"{friction.model}{_title(label)}",
             )
         ax.axhline(0.0, color="0.5", lw=0.6)
         ax.axvline(0.0, color="0.5", lw=0.6)
         ax.grid(True, alpha=0.35)
-        ax.set_xlabel("Velocity (m/s)")
+        ax.set_xlabel(units.axis("Velocity", "velocity"))
         ax.xaxis.set_major_locator(MaxNLocator(nbins=6))
-        ax.set_ylabel("Friction force (N)")
-        ax.secondary_yaxis(
-            "right", functions=(lambda f: f / NEWTON_PER_LBF, lambda f: f * NEWTON_PER_LBF)
-        ).set_ylabel("(lbf)")
-        ax.secondary_xaxis(
-            "top", functions=(lambda v: v / METRE_PER_INCH, lambda v: v * METRE_PER_INCH)
-        ).set_xlabel("(in/s)")
+        ax.set_ylabel(units.axis("Friction force", "force"))
     axes[0].set_title("Full range", fontsize="medium")
     axes[1].set_title("Near zero velocity (breakaway)", fontsize="medium")
     axes[0].legend(loc="best", fontsize="small")
@@ -88,7 +87,8 @@ def plot_friction_curves(
     return _save(fig, path)
 
 
-def plot_area_curves(actuators: Mapping[str, ActuatorParameters], path: Path) -> Path:
+def plot_area_curves(actuators: Mapping[str, ActuatorParameters], path: Path,
+                     units: DisplayUnits = SI) -> Path:
     """Equivalent orifice area cd·A against centered voltage, per port and side (Fig. 24).
 
     Colour: chamber (cap red, rod green); the negative side of the offset is drawn solid,
@@ -102,7 +102,7 @@ def plot_area_curves(actuators: Mapping[str, ActuatorParameters], path: Path) ->
         for curve in area_curves(valve):
             ax.plot(
                 curve.voltage,
-                curve.area * 1e6,
+                units.value(curve.area, "small area"),
                 color=_CHAMBER_COLOURS[curve.chamber],
                 ls="-" if curve.side == "negative" else "--",
                 lw=1.5,
@@ -112,7 +112,7 @@ def plot_area_curves(actuators: Mapping[str, ActuatorParameters], path: Path) ->
         ax.axvline(0.0, color="0.5", lw=0.6)
         ax.grid(True, alpha=0.35)
         ax.set_xlabel("Centered voltage u_c (V)")
-        ax.set_ylabel("Equivalent area cd·A (mm²)")
+        ax.set_ylabel(units.axis("Equivalent area cd·A", "small area"))
         ax.secondary_xaxis(
             "top", functions=(lambda u, o=offset: u + o, lambda u, o=offset: u - o)
         ).set_xlabel("Command (V)")
@@ -122,10 +122,11 @@ def plot_area_curves(actuators: Mapping[str, ActuatorParameters], path: Path) ->
     return _save(fig, path)
 
 
-def plot_input_pressure_curves(actuators: Mapping[str, ActuatorParameters], path: Path) -> Path:
+def plot_input_pressure_curves(actuators: Mapping[str, ActuatorParameters], path: Path,
+                               units: DisplayUnits = SI) -> Path:
     """Steady-state input pressure of each port against voltage (thesis Fig. 23, eq 4.2.7).
 
-    Pressures in psia against the command voltage, with the centered voltage on top and
+    Absolute pressures against the command voltage, with the centered voltage on top and
     the supply and exhaust pressures as dotted lines.
     """
     groups = group_equal({label: (a.valve, a.supply) for label, a in actuators.items()})
@@ -140,7 +141,7 @@ def plot_input_pressure_curves(actuators: Mapping[str, ActuatorParameters], path
             port = f"port {curve.port}" if curve.port else "simple valve"
             ax.plot(
                 curve.voltage + offset,
-                curve.pressure / PASCAL_PER_PSI,
+                units.value(curve.pressure, "pressure"),
                 color=_CHAMBER_COLOURS[curve.chamber],
                 lw=1.6,
                 label=f"{curve.chamber} ({port})",
@@ -149,10 +150,11 @@ def plot_input_pressure_curves(actuators: Mapping[str, ActuatorParameters], path
             (supply.supply_pressure, "supply"),
             (supply.exhaust_pressure, "exhaust"),
         ):
-            ax.axhline(level / PASCAL_PER_PSI, color="0.4", ls=":", lw=0.9)
+            shown = units.value(level, "pressure")
+            ax.axhline(shown, color="0.4", ls=":", lw=0.9)
             ax.annotate(
                 name,
-                (valve.min_voltage, level / PASCAL_PER_PSI),
+                (valve.min_voltage, shown),
                 fontsize="small",
                 color="0.3",
                 xytext=(2, 2),
@@ -161,7 +163,7 @@ def plot_input_pressure_curves(actuators: Mapping[str, ActuatorParameters], path
         ax.axvline(offset, color="0.5", lw=0.6)
         ax.grid(True, alpha=0.35)
         ax.set_xlabel("Command (V)")
-        ax.set_ylabel("Input pressure (psia)")
+        ax.set_ylabel(units.axis("Input pressure", "pressure"))
         ax.secondary_xaxis(
             "top", functions=(lambda u, o=offset: u - o, lambda u, o=offset: u + o)
         ).set_xlabel("Centered voltage u_c (V)")

@@ -16,7 +16,8 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["HtmlPage", "escape", "format_value", "inline_html", "png_data_uri", "table_html"]
+__all__ = ["HtmlPage", "escape", "format_value", "inline_html", "png_data_uri", "table_html",
+           "table_markdown"]
 
 _STYLE = (
     "body{font-family:system-ui,sans-serif;max-width:1050px;margin:auto;padding:0 1em;"
@@ -111,6 +112,20 @@ def table_html(headers: Sequence[str], rows: Iterable[Sequence[Any]], digits: in
         )
         body.append(f"<tr>{cells}</tr>")
     return f"<table><tr>{head}</tr>{''.join(body)}</table>"
+
+
+def table_markdown(headers: Sequence[str], rows: Iterable[Sequence[Any]],
+                   digits: int = 5) -> str:
+    """A Markdown table of the same cells as :func:`table_html` (formatted with
+    :func:`format_value`; a ``|`` in a cell is escaped), ending with a newline."""
+
+    def cell(value: Any) -> str:
+        return format_value(value, digits).replace("|", "\\|")
+
+    lines = ["| " + " | ".join(cell(h) for h in headers) + " |",
+             "|" + "---|" * len(headers)]
+    lines += ["| " + " | ".join(cell(c) for c in row) + " |" for row in rows]
+    return "\n".join(lines) + "\n"
 
 
 def png_data_uri(png: bytes) -> str:

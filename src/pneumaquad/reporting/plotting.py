@@ -1,8 +1,9 @@
 """Figures of rig runs in the style of Daepp (2011), figures 25-28.
 
 Recordings are mappings of SI column names (``"time [s]"``, ``"position [m]"``,
-``"cap pressure [Pa]"``, ...) to arrays. The thesis plots position in inches
-and pressures in psia, so conversion to those units happens here and only here.
+``"cap pressure [Pa]"``, ...) to arrays. Each figure is drawn in the display units it is
+given (:mod:`pneumaquad.reporting.display_units`: SI by default, or the thesis's inches
+and psia), converted here and only here.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import matplotlib
 
-from pneumaquad.params.conversions import METRE_PER_INCH, PASCAL_PER_PSI
+from pneumaquad.reporting.display_units import SI, DisplayUnits
 
 matplotlib.use("Agg")
 
@@ -37,16 +38,6 @@ PNEUMATIC_FORCE = "pneumatic force [N]"
 AIR_CONSUMED = "air consumed [NL]"
 
 Recording = Mapping[str, np.ndarray]
-
-
-def metres_to_inches(value: np.ndarray) -> np.ndarray:
-    """Convert lengths from m to in."""
-    return np.asarray(value, dtype=float) / METRE_PER_INCH
-
-
-def pascals_to_psi(value: np.ndarray) -> np.ndarray:
-    """Convert (absolute) pressures from Pa to psi (psia)."""
-    return np.asarray(value, dtype=float) / PASCAL_PER_PSI
 
 
 def _column(recording: Recording, name: str) -> np.ndarray | None:
@@ -81,7 +72,8 @@ def _finish(
     return path
 
 
-def plot_rig_run(recording: Recording, path: Path, title: str = "") -> Path:
+def plot_rig_run(recording: Recording, path: Path, title: str = "",
+                 units: DisplayUnits = SI) -> Path:
     """Plot one rig run: position, chamber pressures and valve command vs time.
 
     Parameters
@@ -92,6 +84,8 @@ def plot_rig_run(recording: Recording, path: Path, title: str = "") -> Path:
         Output PNG path (parent folders are created).
     title
         Figure title.
+    units
+        Display units (position as a small length, absolute pressures).
 
     Returns
     -------
@@ -106,26 +100,25 @@ def plot_rig_run(recording: Recording, path: Path, title: str = "") -> Path:
 
     position = _column(recording, POSITION)
     if position is not None:
-        ax_pos.plot(time, metres_to_inches(position), color="C0", lw=1.6, label="Position")
+        ax_pos.plot(time, units.value(position, "small length"), color="C0", lw=1.6,
+                    label="Position")
     reference = _column(recording, REFERENCE)
     if reference is not None and bool(np.any(np.isfinite(reference))):
-        ax_pos.plot(
-            time, metres_to_inches(reference), color="k", ls="--", lw=1.1, label="Reference"
-        )
-    ax_pos.set_ylabel("Position (in)")
+        ax_pos.plot(time, units.value(reference, "small length"), color="k", ls="--", lw=1.1,
+                    label="Reference")
+    ax_pos.set_ylabel(units.axis("Position", "small length"))
 
     cap = _column(recording, CAP_PRESSURE)
     if cap is not None:
-        ax_p.plot(time, pascals_to_psi(cap), color="C3", lw=1.5, label="Cap chamber")
+        ax_p.plot(time, units.value(cap, "pressure"), color="C3", lw=1.5, label="Cap chamber")
     rod = _column(recording, ROD_PRESSURE)
     if rod is not None:
-        ax_p.plot(time, pascals_to_psi(rod), color="C2", lw=1.5, label="Rod chamber")
+        ax_p.plot(time, units.value(rod, "pressure"), color="C2", lw=1.5, label="Rod chamber")
     supply = _column(recording, SUPPLY_PRESSURE)
     if supply is not None:
-        ax_p.plot(
-            time, pascals_to_psi(supply), color="0.35", lw=0.9, ls=":", zorder=3, label="Supply"
-        )
-    ax_p.set_ylabel("Pressure (psia)")
+        ax_p.plot(time, units.value(supply, "pressure"), color="0.35", lw=0.9, ls=":",
+                  zorder=3, label="Supply")
+    ax_p.set_ylabel(units.axis("Pressure", "pressure"))
 
     command = _column(recording, COMMAND)
     if command is not None:
@@ -135,8 +128,9 @@ def plot_rig_run(recording: Recording, path: Path, title: str = "") -> Path:
     return _finish(fig, list(axes), path, title)
 
 
-def plot_comparison(recordings: Mapping[str, Recording], path: Path, title: str = "") -> Path:
-    """Overlay several runs: position (in) and cap/rod pressures (psia) vs time.
+def plot_comparison(recordings: Mapping[str, Recording], path: Path, title: str = "",
+                    units: DisplayUnits = SI) -> Path:
+    """Overlay several runs: position and cap/rod pressures vs time.
 
     Each run gets one colour; cap pressure is solid and rod pressure dashed.
 
@@ -148,6 +142,8 @@ def plot_comparison(recordings: Mapping[str, Recording], path: Path, title: str 
         Output PNG path.
     title
         Figure title.
+    units
+        Display units.
     """
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5), layout="constrained")
     ax_pos, ax_p = axes
@@ -156,26 +152,27 @@ def plot_comparison(recordings: Mapping[str, Recording], path: Path, title: str 
         time = _time(recording)
         position = _column(recording, POSITION)
         if position is not None:
-            ax_pos.plot(time, metres_to_inches(position), color=colour, lw=1.5, label=label)
+            ax_pos.plot(time, units.value(position, "small length"), color=colour, lw=1.5,
+                        label=label)
         cap = _column(recording, CAP_PRESSURE)
         if cap is not None:
-            ax_p.plot(time, pascals_to_psi(cap), color=colour, lw=1.4, label=f"{label} cap")
+            ax_p.plot(time, units.value(cap, "pressure"), color=colour, lw=1.4,
+                      label=f"{label} cap")
         rod = _column(recording, ROD_PRESSURE)
         if rod is not None:
-            ax_p.plot(
-                time, pascals_to_psi(rod), color=colour, lw=1.4, ls="--", label=f"{label} rod"
-            )
-    ax_pos.set_ylabel("Position (in)")
-    ax_p.set_ylabel("Pressure (psia)")
+            ax_p.plot(time, units.value(rod, "pressure"), color=colour, lw=1.4, ls="--",
+                      label=f"{label} rod")
+    ax_pos.set_ylabel(units.axis("Position", "small length"))
+    ax_p.set_ylabel(units.axis("Pressure", "pressure"))
     return _finish(fig, list(axes), path, title)
 
 
 def plot_difference(candidate: Recording, reference: Recording, path: Path,
                     labels: tuple[str, str] = ("fixed step", "reference"),
-                    title: str = "") -> Path:
+                    title: str = "", units: DisplayUnits = SI) -> Path:
     """Two runs of the same experiment that agree closely: the position of both, then the
-    candidate's difference from the reference in position (thousandths of an inch) and in
-    the cap and rod pressures (psi), which an overlay would hide.
+    candidate's difference from the reference in position (µm, or thousandths of an inch)
+    and in the cap and rod pressures, which an overlay would hide.
 
     Parameters
     ----------
@@ -187,66 +184,70 @@ def plot_difference(candidate: Recording, reference: Recording, path: Path,
         Names of the candidate and of the reference.
     title
         Figure title.
+    units
+        Display units.
     """
     time = _time(candidate)
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8), height_ratios=[3, 2, 2],
                              layout="constrained")
     ax_pos, ax_dx, ax_dp = axes
     for label, recording, style in ((labels[1], reference, "-"), (labels[0], candidate, "--")):
-        ax_pos.plot(time, metres_to_inches(recording[POSITION]), ls=style, lw=1.5, label=label)
-    ax_pos.set_ylabel("Position (in)")
-    difference = metres_to_inches(candidate[POSITION] - reference[POSITION]) * 1e3
+        ax_pos.plot(time, units.value(recording[POSITION], "small length"), ls=style, lw=1.5,
+                    label=label)
+    ax_pos.set_ylabel(units.axis("Position", "small length"))
+    difference = units.value(candidate[POSITION] - reference[POSITION], "tiny length")
     ax_dx.plot(time, difference, color="C0", lw=1.2)
-    ax_dx.set_ylabel("Position difference\n(0.001 in)")
+    ax_dx.set_ylabel(units.axis("Position difference\n", "tiny length"))
     for column, colour, name in ((CAP_PRESSURE, "C3", "cap"), (ROD_PRESSURE, "C2", "rod")):
-        ax_dp.plot(time, pascals_to_psi(candidate[column] - reference[column]), color=colour,
-                   lw=1.2, label=name)
-    ax_dp.set_ylabel("Pressure difference\n(psi)")
+        ax_dp.plot(time, units.value(candidate[column] - reference[column],
+                                     "pressure difference"),
+                   color=colour, lw=1.2, label=name)
+    ax_dp.set_ylabel(units.axis("Pressure difference\n", "pressure difference"))
     for axis in (ax_dx, ax_dp):
         axis.axhline(0.0, color="k", lw=0.6)
     return _finish(fig, list(axes), path, title)
 
 
 def plot_held_pressures(recordings: Mapping[str, Recording], targets: Mapping[str, tuple],
-                        path: Path, title: str = "") -> Path:
-    """Chamber pressures (psia) of runs with the piston held, each beside the levels it
-    should settle at (dotted): ``targets`` maps a run's label to its (cap, rod) pressures
-    [Pa]. No position panel: the piston does not move."""
+                        path: Path, title: str = "", units: DisplayUnits = SI) -> Path:
+    """Chamber pressures of runs with the piston held, each beside the levels it should
+    settle at (dotted): ``targets`` maps a run's label to its (cap, rod) pressures [Pa].
+    No position panel: the piston does not move."""
     fig, ax = plt.subplots(figsize=(8, 5), layout="constrained")
     for index, (label, recording) in enumerate(recordings.items()):
         colour = f"C{index % 10}"
         time = _time(recording)
-        ax.plot(time, pascals_to_psi(recording[CAP_PRESSURE]), color=colour, lw=1.5,
+        ax.plot(time, units.value(recording[CAP_PRESSURE], "pressure"), color=colour, lw=1.5,
                 label=f"{label} cap")
-        ax.plot(time, pascals_to_psi(recording[ROD_PRESSURE]), color=colour, lw=1.5, ls="--",
-                label=f"{label} rod")
+        ax.plot(time, units.value(recording[ROD_PRESSURE], "pressure"), color=colour, lw=1.5,
+                ls="--", label=f"{label} rod")
         for level in targets.get(label, ()):
-            ax.axhline(pascals_to_psi(level), color=colour, lw=0.9, ls=":")
+            ax.axhline(units.value(level, "pressure"), color=colour, lw=0.9, ls=":")
     ax.plot([], [], color="0.4", lw=0.9, ls=":", label="input-pressure curve (eq 4.2.7)")
-    ax.set_ylabel("Pressure (psia)")
+    ax.set_ylabel(units.axis("Pressure", "pressure"))
     return _finish(fig, [ax], path, title)
 
 
 def plot_tank_run(recording: Recording, set_point: float, path: Path,
-                  title: str = "") -> Path:
-    """A run drawn from a finite tank: position and reference (in), the tank pressure
-    beside the regulated supply and the regulator's set point ``set_point`` [Pa] (psia),
-    and the air consumed (NL) over time."""
+                  title: str = "", units: DisplayUnits = SI) -> Path:
+    """A run drawn from a finite tank: position and reference, the tank pressure beside
+    the regulated supply and the regulator's set point ``set_point`` [Pa], and the air
+    consumed (NL) over time."""
     time = _time(recording)
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8), layout="constrained")
     ax_pos, ax_p, ax_air = axes
-    ax_pos.plot(time, metres_to_inches(recording[POSITION]), color="C0", lw=1.2,
+    ax_pos.plot(time, units.value(recording[POSITION], "small length"), color="C0", lw=1.2,
                 label="Position")
-    ax_pos.plot(time, metres_to_inches(recording[REFERENCE]), color="k", ls="--", lw=0.9,
-                label="Reference")
-    ax_pos.set_ylabel("Position (in)")
-    ax_p.plot(time, pascals_to_psi(recording[TANK_PRESSURE]), color="C1", lw=1.6,
+    ax_pos.plot(time, units.value(recording[REFERENCE], "small length"), color="k", ls="--",
+                lw=0.9, label="Reference")
+    ax_pos.set_ylabel(units.axis("Position", "small length"))
+    ax_p.plot(time, units.value(recording[TANK_PRESSURE], "pressure"), color="C1", lw=1.6,
               label="Tank")
-    ax_p.plot(time, pascals_to_psi(recording[SUPPLY_PRESSURE]), color="C0", lw=1.2,
+    ax_p.plot(time, units.value(recording[SUPPLY_PRESSURE], "pressure"), color="C0", lw=1.2,
               label="Regulated supply")
-    ax_p.axhline(pascals_to_psi(set_point), color="0.35", ls=":", lw=1.0,
+    ax_p.axhline(units.value(set_point, "pressure"), color="0.35", ls=":", lw=1.0,
                  label="Regulator set point")
-    ax_p.set_ylabel("Pressure (psia)")
+    ax_p.set_ylabel(units.axis("Pressure", "pressure"))
     ax_air.plot(time, recording[AIR_CONSUMED], color="C4", lw=1.5, label="Air consumed")
     ax_air.set_ylabel("Air (NL)")
     return _finish(fig, list(axes), path, title)
@@ -256,6 +257,7 @@ def plot_friction_curve(
     curves: Mapping[str, tuple[np.ndarray, np.ndarray]],
     path: Path,
     title: str = "",
+    units: DisplayUnits = SI,
 ) -> Path:
     """Plot friction force against piston velocity for one or more models.
 
@@ -268,14 +270,17 @@ def plot_friction_curve(
         Output PNG path.
     title
         Figure title.
+    units
+        Display units.
     """
     fig, ax = plt.subplots(figsize=(7, 4.5), layout="constrained")
     for label, (velocity, force) in curves.items():
         v = np.asarray(velocity, dtype=float)
         f = np.asarray(force, dtype=float)
         order = np.argsort(v, kind="stable")
-        ax.plot(v[order], f[order], lw=1.5, label=label)
+        ax.plot(units.value(v[order], "velocity"), units.value(f[order], "force"), lw=1.5,
+                label=label)
     ax.axhline(0.0, color="0.5", lw=0.6)
     ax.axvline(0.0, color="0.5", lw=0.6)
-    ax.set_ylabel("Friction force (N)")
-    return _finish(fig, [ax], path, title, xlabel="Velocity (m/s)")
+    ax.set_ylabel(units.axis("Friction force", "force"))
+    return _finish(fig, [ax], path, title, xlabel=units.axis("Velocity", "velocity"))

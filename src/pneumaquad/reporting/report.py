@@ -16,6 +16,7 @@ from pneumaquad.io.measured import load_mapping, read_measured
 from pneumaquad.params import RigSetup
 
 from .comparison import compare_with_measured
+from .display_units import DisplayUnits, display_units
 from .html import HtmlPage
 from .run_folder import LoadedRun, ReportError, load_run_folder
 from .sections import (
@@ -40,6 +41,7 @@ def write_run_report(
     measured_source: str = "",
     time_offset: float = 0.0,
     progress: Progress | None = None,
+    units: str | DisplayUnits = "si",
 ) -> Path:
     """Write ``report.html`` and its PNGs for a loaded run.
 
@@ -58,6 +60,9 @@ def write_run_report(
         Added to the measured time stamps [s].
     progress : callable, optional
         Called with (sections done, sections total).
+    units : str or DisplayUnits
+        Units of every figure, table and text: ``"si"`` (default) or ``"us"`` (the
+        thesis's in, psi, lbf); see :mod:`pneumaquad.reporting.display_units`.
 
     Returns
     -------
@@ -68,7 +73,10 @@ def write_run_report(
     ------
     ReportError
         For measured data with a robot run, or measured data that cannot be compared.
+    ValueError
+        For an unknown unit system.
     """
+    shown = display_units(units)
     if measured is not None and not isinstance(run.parameters, RigSetup):
         raise ReportError(
             "comparison with measured data is available for rig runs only; "
@@ -83,24 +91,25 @@ def write_run_report(
     )
     page.paragraph(
         f"Run folder {run.path} ({run.kind} run, parameter set {run.set_name}); "
-        f"report written {datetime.datetime.now().isoformat(timespec='seconds')}."
-        f"{interrupted}"
+        f"report written {datetime.datetime.now().isoformat(timespec='seconds')} in "
+        f"{shown.description}.{interrupted}"
     )
     for note in run.notes:
         page.paragraph(note, note=True)
     steps: list[Callable[[], None]] = [
-        lambda: add_parameters(page, run),
-        lambda: add_summary(page, run),
-        lambda: add_time_histories(page, run, folder),
-        lambda: add_model_curves(page, run, folder),
-        lambda: add_network_timing(page, run),
+        lambda: add_parameters(page, run, shown),
+        lambda: add_summary(page, run, shown),
+        lambda: add_time_histories(page, run, folder, shown),
+        lambda: add_model_curves(page, run, folder, shown),
+        lambda: add_network_timing(page, run, shown),
     ]
     if measured is not None:
         assert isinstance(run.parameters, RigSetup)
         stroke = run.parameters.actuator.cylinder.stroke
         # compared first, so that data that cannot be compared fails before any file
         result = compare_with_measured(run.recording, measured, stroke, time_offset)
-        steps.append(lambda: add_comparison(page, run, result, measured, measured_source, folder))
+        steps.append(lambda: add_comparison(page, run, result, measured, measured_source, folder,
+                                            shown))
     folder.mkdir(parents=True, exist_ok=True)
     for index, step in enumerate(steps):
         step()
@@ -116,6 +125,7 @@ def build_run_report(
     mapping: Path | None = None,
     time_offset: float = 0.0,
     progress: Progress | None = None,
+    units: str | DisplayUnits = "si",
 ) -> Path:
     """Load a run folder (and measured data) and write its report.
 
@@ -131,6 +141,8 @@ def build_run_report(
         Added to the measured time stamps [s].
     progress : callable, optional
         Called with (sections done, sections total).
+    units : str or DisplayUnits
+        ``"si"`` (default) or ``"us"``: see :func:`write_run_report`.
 
     Returns
     -------
@@ -141,7 +153,10 @@ def build_run_report(
     ------
     ReportError, ParameterError, MeasuredDataError
         For a missing or malformed run folder, parameter file or measured data.
+    ValueError
+        For an unknown unit system.
     """
+    display_units(units)  # an unknown system fails before anything is read
     if (measured is None) != (mapping is None):
         raise ReportError("--measured and --mapping go together: give both or neither")
     loaded = load_run_folder(run)
@@ -154,4 +169,5 @@ def build_run_report(
             )
         recording = read_measured(measured, load_mapping(mapping))
     folder = Path(output) if output is not None else loaded.path / "report"
-    return write_run_report(loaded, folder, recording, str(measured or ""), time_offset, progress)
+    return write_run_report(loaded, folder, recording, str(measured or ""), time_offset, progress,
+                            units)

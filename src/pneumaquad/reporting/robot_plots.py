@@ -1,5 +1,6 @@
 """Plots of robot runs: joint tracking with both chamber pressures (like thesis Fig. 38-45)
-and the body: thorax height and attitude, foot forces and air consumed."""
+and the body: thorax height and attitude, foot forces and air consumed; the walk. Each is
+drawn in the display units it is given (SI by default; angles in degrees either way)."""
 
 from __future__ import annotations
 
@@ -8,14 +9,16 @@ from pathlib import Path
 
 import numpy as np
 
-from pneumaquad.reporting.plotting import DPI, pascals_to_psi, plt
+from pneumaquad.gait.stability import STANCE_FORCE
+from pneumaquad.reporting.display_units import SI, DisplayUnits
+from pneumaquad.reporting.plotting import DPI, plt
 
 __all__ = ["plot_body", "plot_joints", "plot_walking"]
 
 
 def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: Path,
-                title: str = "") -> Path:
-    """Per joint: reference vs actual angle [deg] above cap and rod pressure [psia].
+                title: str = "", units: DisplayUnits = SI) -> Path:
+    """Per joint: reference vs actual angle [deg] above cap and rod pressure (absolute).
 
     The reference is drawn only while the joint is under closed-loop control.
     """
@@ -38,8 +41,9 @@ def plot_joints(recording: dict[str, np.ndarray], joints: Sequence[str], path: P
         for side, colour in (("cap", "C3"), ("rod", "C2")):
             pressure = recording.get(f"{joint} {side} pressure [Pa]")
             if pressure is not None:
-                pressure_axis.plot(time, pascals_to_psi(pressure), colour, lw=1.0, label=side)
-        pressure_axis.set_ylabel("Pressure (psia)")
+                pressure_axis.plot(time, units.value(pressure, "pressure"), colour, lw=1.0,
+                                   label=side)
+        pressure_axis.set_ylabel(units.axis("Pressure", "pressure"))
         pressure_axis.set_xlabel("Time (s)")
     return _save(fig, axes.ravel(), path, title)
 
@@ -59,19 +63,19 @@ def _at_least_span(axis, span: float) -> None:
 
 
 def plot_body(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
-              title: str = "") -> Path:
-    """Thorax height [m], roll/pitch [deg], foot normal forces [N] and air consumed [NL]."""
+              title: str = "", units: DisplayUnits = SI) -> Path:
+    """Thorax height, roll/pitch [deg], foot normal forces and air consumed [NL]."""
     time = recording["time [s]"]
     fig, axes = plt.subplots(4, 1, figsize=(8.0, 8.5), sharex=True)
-    axes[0].plot(time, recording["thorax z [m]"], "C0")
-    axes[0].set_ylabel("Thorax height (m)")
+    axes[0].plot(time, units.value(recording["thorax z [m]"], "length"), "C0")
+    axes[0].set_ylabel(units.axis("Thorax height", "length"))
     axes[1].plot(time, np.degrees(recording["thorax roll [rad]"]), "C1", label="roll")
     axes[1].plot(time, np.degrees(recording["thorax pitch [rad]"]), "C2", label="pitch")
     axes[1].set_ylabel("Attitude (deg)")
     for leg in legs:
-        axes[2].plot(time, recording[f"{leg} foot normal force [N]"], lw=1.0,
-                     label=leg.replace("_", " "))
-    axes[2].set_ylabel("Foot force (N)")
+        axes[2].plot(time, units.value(recording[f"{leg} foot normal force [N]"], "force"),
+                     lw=1.0, label=leg.replace("_", " "))
+    axes[2].set_ylabel(units.axis("Foot force", "force"))
     axes[3].plot(time, recording["air consumed [NL]"], "C4")
     axes[3].set_ylabel("Air consumed (NL)")
     axes[3].set_xlabel("Time (s)")
@@ -79,30 +83,39 @@ def plot_body(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
 
 
 def plot_walking(recording: dict[str, np.ndarray], legs: Sequence[str], path: Path,
-                 tip_over: np.ndarray | None = None, title: str = "") -> Path:
-    """Walking: thorax travel [m], static margins [mm] over time, foot heights [mm].
+                 tip_over: np.ndarray | None = None, title: str = "",
+                 units: DisplayUnits = SI) -> Path:
+    """Walking: thorax travel, static margins over time, foot heights (m and mm, or in).
 
     ``tip_over`` (same length as the recording, NaN outside the walk) is the margin in the
     support of the feet the gait holds down; the recorded margin uses the loaded feet.
     """
     time = recording["time [s]"]
     fig, axes = plt.subplots(3, 1, figsize=(8.0, 7.5), sharex=True)
-    axes[0].plot(time, recording["thorax x [m]"], "C0", label="x")
-    axes[0].plot(time, recording["thorax y [m]"], "C1", label="y")
-    axes[0].set_ylabel("Thorax (m)")
-    margin = 1000.0 * recording["stability margin [m]"]
-    axes[1].plot(time, margin, "C3", lw=0.8, label="loaded feet (> 1 N)")
+    axes[0].plot(time, units.value(recording["thorax x [m]"], "length"), "C0", label="x")
+    axes[0].plot(time, units.value(recording["thorax y [m]"], "length"), "C1", label="y")
+    axes[0].set_ylabel(units.axis("Thorax", "length"))
+    margin = units.value(recording["stability margin [m]"], "small length")
+    loaded = units.text(STANCE_FORCE, "force", 2)
+    axes[1].plot(time, margin, "C3", lw=0.8, label=f"loaded feet (> {loaded})")
     if tip_over is not None:
-        axes[1].plot(time, 1000.0 * tip_over, "C2", lw=1.2, label="feet the gait holds down")
+        axes[1].plot(time, units.value(tip_over, "small length"), "C2", lw=1.2,
+                     label="feet the gait holds down")
     axes[1].axhline(0.0, color="k", lw=0.8)
-    axes[1].set_ylim(max(-200.0, float(np.nanmin(margin, initial=0.0))) - 10.0, 150.0)
-    axes[1].set_ylabel("Static margin (mm)")
+    low, high, pad = (units.value(v, "small length") for v in MARGIN_AXIS)
+    axes[1].set_ylim(max(low, float(np.nanmin(margin, initial=0.0))) - pad, high)
+    axes[1].set_ylabel(units.axis("Static margin", "small length"))
     for leg in legs:
-        axes[2].plot(time, 1000.0 * recording[f"{leg} foot z [m]"], lw=1.0,
-                     label=leg.replace("_", " "))
-    axes[2].set_ylabel("Foot height (mm)")
+        axes[2].plot(time, units.value(recording[f"{leg} foot z [m]"], "small length"),
+                     lw=1.0, label=leg.replace("_", " "))
+    axes[2].set_ylabel(units.axis("Foot height", "small length"))
     axes[2].set_xlabel("Time (s)")
     return _save(fig, axes, path, title)
+
+
+#: The static margin panel's lowest bottom, its top and the room below the lowest margin
+#: [m]: a fall's margin does not squash the walk's.
+MARGIN_AXIS = (-0.2, 0.15, 0.01)
 
 
 def _save(fig, axes, path: Path, title: str) -> Path:

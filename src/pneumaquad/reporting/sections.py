@@ -1,6 +1,7 @@
 """Sections of a run report: each adds headings, tables and figures to an :class:`HtmlPage`.
 
-Figures are written as PNG files into the report folder and embedded in the page.
+Figures are written as PNG files into the report folder and embedded in the page; every
+number with a unit is shown in the report's :class:`~.display_units.DisplayUnits`.
 """
 
 from __future__ import annotations
@@ -10,13 +11,14 @@ from pathlib import Path
 
 import numpy as np
 
-from pneumaquad.analysis.compare import comparison_rows, comparison_to_markdown
+from pneumaquad.analysis.compare import comparison_rows
 from pneumaquad.io.run_folder import TIMING_NAME, write_json
 from pneumaquad.params import RigSetup, RobotParameters
 from pneumaquad.reporting.plotting import plot_rig_run
-from pneumaquad.reporting.robot_plots import plot_body, plot_joints
+from pneumaquad.reporting.robot_plots import plot_body, plot_joints, plot_walking
 
 from .comparison import (
+    COMPARISON_HEADERS,
     MeasuredComparison,
     comparison_table_rows,
     plot_errors,
@@ -24,8 +26,16 @@ from .comparison import (
 )
 from .curve_plots import plot_area_curves, plot_friction_curves, plot_input_pressure_curves
 from .curves import group_equal
-from .html import HtmlPage
-from .parameters import actuator_rows, flatten_summary, rig_parameter_rows, robot_parameter_rows
+from .display_units import DisplayUnits
+from .html import HtmlPage, table_markdown
+from .parameters import (
+    PARAMETER_HEADERS,
+    actuator_rows,
+    flatten_summary,
+    rig_parameter_rows,
+    robot_parameter_rows,
+    shown_rows,
+)
 from .run_folder import LoadedRun
 
 __all__ = [
@@ -42,36 +52,50 @@ __all__ = [
 
 #: The figures of a report against measured data, beside its report.html.
 COMPARISON_NAME = "comparison.json"
+#: Keys of a step's row that hold the command (a position or a voltage, no unit in the key).
+_COMMAND_KEYS = ("initial command", "final command")
 
-_PARAMETER_HEADERS = ("group", "parameter", "value (SI)", "unit", "thesis units")
 
+def closed_loop(run: LoadedRun) -> bool:
+    """Whether a rig run followed a position reference (its summary says so, or failing
+    that its recording has a finite reference)."""
+    if "closed loop" in run.summary:
+        return bool(run.summary["closed loop"])
+    reference = run.recording.get("reference position [m]")
+    return reference is not None and bool(np.all(np.isfinite(reference)))
 
-def add_parameters(page: HtmlPage, run: LoadedRun) -> None:
+def add_parameters(page: HtmlPage, run: LoadedRun, units: DisplayUnits) -> None:
     """Key run parameters (and, for robots, one table per distinct actuator set)."""
     page.heading("Run parameters")
     page.paragraph(
-        "Key values of the resolved parameters.toml (SI; pressures absolute).", note=True
+        "Key values of the resolved parameters.toml (which holds them in SI), shown in "
+        "this report's units; pressures absolute unless marked gauge.", note=True
     )
     if isinstance(run.parameters, RigSetup):
-        page.table(_PARAMETER_HEADERS, rig_parameter_rows(run.parameters))
+        atmosphere = run.parameters.actuator.gas.atmospheric_pressure
+        page.table(PARAMETER_HEADERS, shown_rows(rig_parameter_rows(run.parameters),
+                                                 units.with_atmosphere(atmosphere)))
         return
     assert isinstance(run.parameters, RobotParameters)
     page.table(
-        _PARAMETER_HEADERS,
-        robot_parameter_rows(run.parameters, run.summary, run.folder.model_file),
+        PARAMETER_HEADERS,
+        shown_rows(robot_parameter_rows(run.parameters, run.summary, run.folder.model_file),
+                   units),
     )
     for labels, actuator in group_equal(run.actuators):
         page.heading(f"Actuator of the {labels} joints ({actuator.meta.name})", level=3)
-        page.table(_PARAMETER_HEADERS, actuator_rows(actuator))
+        shown = units.with_atmosphere(actuator.gas.atmospheric_pressure)
+        page.table(PARAMETER_HEADERS, shown_rows(actuator_rows(actuator), shown))
 
 
-def add_summary(page: HtmlPage, run: LoadedRun) -> None:
-    """The metrics of summary.json as a two-column table (nested tables flattened)."""
+def add_summary(page: HtmlPage, run: LoadedRun, units: DisplayUnits) -> None:
+    """The metrics of summary.json as a two-column table (nested tables flattened), each
+    key's unit in the report's units (summary.json itself is SI)."""
     page.heading("Metrics (summary.json)")
     if not run.summary:
         page.paragraph("No summary.json in the run folder.", note=True)
         return
-    page.table(("metric", "value"), flatten_summary(run.summary), digits=6)
+    page.table(("metric", "value"), units.rows(flatten_summary(run.summary)), digits=6)
 
 
 def commanded_joints(run: LoadedRun) -> list[str]:
@@ -95,7 +119,8 @@ def commanded_joints(run: LoadedRun) -> list[str]:
     ]
 
 
-def add_time_histories(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
+def add_time_histories(page: HtmlPage, run: LoadedRun, folder: Path,
+                       units: DisplayUnits) -> None:
     """Rig: position, pressures and command (Fig. 25–28). Robot: per commanded leg,
     reference vs angle and both pressures (Fig. 38–45); the body when it is free."""
     page.heading("Time histories")
@@ -104,11 +129,13 @@ def add_time_histories(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
         page.paragraph("The recording has fewer than two samples: nothing to plot.", note=True)
         return
     if run.kind == "rig":
-        path = plot_rig_run(recording, folder / "rig.png", title=run.description)
+        path = plot_rig_run(recording, folder / "rig.png", title=run.description,
+                            units=units)
         page.figure(
             path,
-            "Position (in), cap and rod pressures (psia) and valve command "
-            "(V) against time, as in thesis Fig. 25–28.",
+            f"Position ({units.unit('small length')}), cap and rod pressures "
+            f"({units.unit('pressure')}) and valve command (V) against time, as in thesis "
+            "Fig. 25–28.",
         )
         return
     joints = commanded_joints(run)
@@ -120,11 +147,12 @@ def add_time_histories(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
             leg_joints,
             folder / f"joints-{leg}.png",
             f"{run.description}: {leg.replace('_', ' ')}",
+            units,
         )
         page.figure(
             path,
             f"{leg.replace('_', ' ')}: reference and simulated angle (deg), "
-            "cap and rod pressure (psia), as in thesis Fig. 38–45.",
+            f"cap and rod pressure ({units.unit('pressure')}), as in thesis Fig. 38–45.",
         )
     feet = [
         c.removesuffix(" foot normal force [N]")
@@ -132,9 +160,9 @@ def add_time_histories(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
         if c.endswith(" foot normal force [N]")
     ]
     if run.summary.get("configuration") != "fixed" and "thorax z [m]" in recording and feet:
-        path = plot_body(recording, feet, folder / "body.png", run.description)
+        path = plot_body(recording, feet, folder / "body.png", run.description, units)
         page.figure(path, "Thorax height, attitude, foot normal forces and air consumed.")
-    add_walking(page, run)
+    add_walking(page, run, folder, units)
     preview = run.path / "video.gif"
     snapshot = run.path / "first-frame.png"
     if preview.is_file() and preview.stat().st_size <= MAX_EMBEDDED_GIF:
@@ -147,21 +175,36 @@ def add_time_histories(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
 MAX_EMBEDDED_GIF = 12 * 1024 * 1024
 
 
-def add_walking(page: HtmlPage, run: LoadedRun) -> None:
-    """The walking judgement of a ``robot walk`` run (summary "walking") and walking.png."""
+def add_walking(page: HtmlPage, run: LoadedRun, folder: Path, units: DisplayUnits) -> None:
+    """The walking judgement of a ``robot walk`` run (summary "walking") and its figure:
+    the run's walking.png (drawn in SI when the walk ran), or in other units the same
+    figure drawn again from the recording, without the tip-over margin the walk's plan
+    gave (the table has its smallest and median)."""
     outcome = run.summary.get("walking")
     if not outcome:
         return
     page.heading("Walking", level=3)
     verdict = "success" if outcome.get("success") else "failure"
     page.paragraph(f"Outcome: {verdict} ({', '.join(outcome.get('reasons', []))}).")
-    page.table(["quantity", "value"],
-               [(key, value if not isinstance(value, list) else ", ".join(value) or "none")
-                for key, value in outcome.items() if key not in ("success", "reasons")])
+    rows = flatten_summary({key: value for key, value in outcome.items()
+                            if key not in ("success", "reasons")})
+    page.table(["quantity", "value"], [(key, value or "none" if isinstance(value, str)
+                                        else value) for key, value in units.rows(rows)])
     figure = run.path / "walking.png"
-    if figure.is_file():
+    if not figure.is_file():
+        return
+    if units.system == "si":
         page.figure(figure, "Thorax travel, static margin of the loaded feet and of the feet "
                             "the gait holds down (tip-over margin), foot heights.")
+        return
+    legs = [c.removesuffix(" foot z [m]") for c in run.recording if c.endswith(" foot z [m]")]
+    needed = ("thorax x [m]", "thorax y [m]", "stability margin [m]")
+    if legs and all(column in run.recording for column in needed):
+        path = plot_walking(run.recording, legs, folder / "walking.png", None,
+                            run.description, units)
+        page.figure(path, "Thorax travel, static margin of the loaded feet, foot heights "
+                          "(the tip-over margin of the feet the gait holds down is in the "
+                          "run folder's walking.png, drawn in SI).")
 
 
 def velocity_limit(run: LoadedRun, default: float = 0.3) -> float:
@@ -178,7 +221,8 @@ def velocity_limit(run: LoadedRun, default: float = 0.3) -> float:
     return float(np.clip(1.2 * max(speeds), 0.02, 2.0))
 
 
-def add_model_curves(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
+def add_model_curves(page: HtmlPage, run: LoadedRun, folder: Path,
+                     units: DisplayUnits) -> None:
     """Friction law (Fig. 15–16), equivalent areas (Fig. 24), input pressures (Fig. 23)."""
     page.heading("Model curves from the run's parameters")
     if not run.actuators:
@@ -192,21 +236,21 @@ def add_model_curves(page: HtmlPage, run: LoadedRun, folder: Path) -> None:
             note=True,
         )
     limit = velocity_limit(run)
-    path = plot_friction_curves(run.actuators, folder / "friction.png", limit)
+    path = plot_friction_curves(run.actuators, folder / "friction.png", limit, units)
     page.figure(
         path,
         "Friction force against piston velocity of the configured model "
         "(thesis eq 4.2.1–4.2.6, Fig. 15–16); LuGre at steady state. Right: "
         "zoom on the breakaway peak.",
     )
-    path = plot_area_curves(run.actuators, folder / "valve-area.png")
+    path = plot_area_curves(run.actuators, folder / "valve-area.png", units)
     page.figure(
         path,
         "Equivalent orifice area cd·A of each chamber's port against the "
         "centered voltage, one polynomial per side of the offset (thesis "
         "Fig. 24, App. B.1.2).",
     )
-    path = plot_input_pressure_curves(run.actuators, folder / "input-pressure.png")
+    path = plot_input_pressure_curves(run.actuators, folder / "input-pressure.png", units)
     page.figure(
         path,
         "Steady-state input pressure seen by each port against the valve "
@@ -221,8 +265,10 @@ def add_comparison(
     measured: dict[str, np.ndarray],
     source: str,
     folder: Path,
+    units: DisplayUnits,
 ) -> None:
-    """Measured vs simulated figures, the metric table and per-step figures."""
+    """Measured vs simulated figures, the metric table and per-step figures; the metric
+    table also as comparison.md (in the report's units) and, in SI, comparison.json."""
     page.heading("Measured vs simulated")
     page.paragraph(
         f"Measured data: {source}. Time offset added to the measured time: "
@@ -236,44 +282,42 @@ def add_comparison(
         folder / "measured-vs-simulated.png",
         comparison.time_offset,
         run.description,
+        units,
     )
-    page.figure(path, "Measured and simulated position (in) and pressures (psia).")
-    headers = (
-        "signal",
-        "unit",
-        "RMSE",
-        "RMSE [% of range]",
-        "max abs error",
-        "lag [s]",
-        "τ simulated [s]",
-        "τ measured [s]",
-    )
-    page.table(headers, comparison_table_rows(comparison.comparisons))
+    page.figure(path, f"Measured and simulated position ({units.unit('small length')}) and "
+                      f"pressures ({units.unit('pressure')}).")
+    rows = comparison_table_rows(comparison.comparisons, units)
+    page.table(COMPARISON_HEADERS, rows)
     if comparison.step_time is not None:
         page.paragraph(
             f"τ: first-order fits (thesis eq 4.3.1) from the step at {comparison.step_time:g} s.",
             note=True,
         )
-    path = plot_errors(comparison, folder / "measured-error.png")
+    path = plot_errors(comparison, folder / "measured-error.png", units)
     page.figure(path, "Simulated minus measured on the common time grid.")
     if comparison.steps_simulated:
         page.heading("Position figures per step", level=3)
         page.paragraph(
             "Steps found in the simulated reference (closed loop) or valve command "
-            "(open loop); the commands are in m or V accordingly.",
+            "(open loop); the commands are positions or voltages accordingly.",
             note=True,
         )
+        command_unit = "m" if closed_loop(run) else "V"
         labelled = [("simulated", row) for row in comparison.steps_simulated]
         labelled += [("measured", row) for row in comparison.steps_measured]
         labelled.sort(key=lambda item: (item[1].get("step", 0), item[0] != "simulated"))
         keys = list(dict.fromkeys(k for _, row in labelled for k in row))
+        named = [f"{k} [{command_unit}]" if k in _COMMAND_KEYS else k for k in keys]
+        shown = [units.rows([(name, row.get(k, math.nan)) for name, k in zip(named, keys,
+                                                                             strict=True)])
+                 for _, row in labelled]
         page.table(
-            ["data", *keys],
-            [[label, *(row.get(k, math.nan) for k in keys)] for label, row in labelled],
+            ["data", *(name for name, _ in shown[0])] if shown else ["data"],
+            [[label, *(value for _, value in cells)]
+             for (label, _), cells in zip(labelled, shown, strict=True)],
         )
-    (folder / "comparison.md").write_text(
-        comparison_to_markdown(comparison.comparisons), encoding="utf-8"
-    )
+    (folder / "comparison.md").write_text(table_markdown(COMPARISON_HEADERS, rows, digits=4),
+                                          encoding="utf-8")
     document = {
         "signals": comparison_rows(comparison.comparisons),
         "steps simulated": comparison.steps_simulated,
@@ -284,7 +328,7 @@ def add_comparison(
     write_json(folder / COMPARISON_NAME, document)
 
 
-def add_network_timing(page: HtmlPage, run: LoadedRun) -> None:
+def add_network_timing(page: HtmlPage, run: LoadedRun, units: DisplayUnits) -> None:
     """A networked run's packet timing (``timing.json``, ``rtt.png``, ``timeline.png``):
     round trips, pauses, losses, duplicates, reorders, malformed datagrams, jitter."""
     timing = run.timing
@@ -299,7 +343,7 @@ def add_network_timing(page: HtmlPage, run: LoadedRun) -> None:
         "trips, the pauses between datagrams (the thesis tracked these with Wireshark, "
         "5.3.1), and what was dropped and why."
     )
-    page.table(("figure", "value"), flatten_summary(timing), digits=6)
+    page.table(("figure", "value"), units.rows(flatten_summary(timing)), digits=6)
     for name, caption in (
         ("rtt.png", "Round-trip times (histogram) with median, p99 and the control period."),
         ("timeline.png", "Inter-arrival gaps and pauses over the run."),
