@@ -61,3 +61,12 @@ def test_help_placeholders_say_what_to_type(path, capsys):
     assert "Usage: pneumaquad" in text
     python_types = re.findall(r"<(?:str|float|int|bool|path|Path|list\[[^\]]*\])>", text)
     assert python_types == [], f"{' '.join(path)}: {python_types}"
+
+
+@pytest.mark.parametrize(("path", "command"), COMMANDS,
+                         ids=[" ".join(path) for path, _ in COMMANDS])
+def test_every_option_and_argument_says_what_it_is(path, command):
+    """``video --fps/--width/--height`` had no description once: every parameter has one."""
+    silent = [param.name for param in command.params
+              if param.name != "help" and not (getattr(param, "help", None) or "").strip()]
+    assert silent == [], f"{' '.join(path)}: no help for {silent}"

@@ -37,6 +37,7 @@ __all__ = [
     "command_clock",
     "command_group",
     "console",
+    "exit_if_interrupted",
     "finish_run",
     "option_range",
     "progress_bar",
@@ -342,6 +343,11 @@ def finish_run(folder: Path, summary: dict, clock: StageClock | None = None,
             console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
     if clock is not None:
         report_command_time(folder, summary, clock, profile)
+    exit_if_interrupted(summary)
+
+
+def exit_if_interrupted(summary: dict) -> None:
+    """End with 130 and a yellow line if the run was interrupted (Ctrl-C)."""
     if summary.get("interrupted"):
         stderr_console.print("[yellow]interrupted: the recording holds the part that ran[/yellow]")
         raise typer.Exit(130)

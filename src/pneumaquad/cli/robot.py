@@ -27,7 +27,7 @@ from pneumaquad.cli.common import (
     command_clock,
     command_group,
     console,
-    finish_run,
+    exit_if_interrupted,
     number_in,
     option_range,
     progress_bar,
@@ -186,8 +186,7 @@ def _report(simulation, run, description: str, worker: VideoWorker | None, video
         with clock.stage("profile (timing the parts of the simulation)"):
             split_simulation_time(simulation, clock, steps)
     report_command_time(folder, run.summary, clock, profile)
-    if run.summary.get("interrupted"):
-        finish_run(folder, run.summary)
+    exit_if_interrupted(run.summary)  # the figures above are printed once
     if not waited:
         raise typer.Exit(130)
 
@@ -518,7 +517,9 @@ def robot_walk(
 
 @robot_app.command("export")
 def robot_export(
-    path: Annotated[Path, typer.Argument(help="MJCF file to write.")],
+    path: Annotated[Path | None, typer.Argument(
+        help="MJCF file to write (default: model.xml in a new runs/robot-export-<time> "
+             "folder).")] = None,
     configuration: Annotated[str, typer.Option(help="quadruped, fixed or testbed.")] = (
         "quadruped"
     ),
@@ -526,8 +527,11 @@ def robot_export(
     seed: SeedOption = 0,
     params: RobotParamsOption = "crr-quadruped",
     overrides: SetOption = None,
+    overwrite: Annotated[bool, typer.Option(
+        "--overwrite", help="Replace PATH if it exists.")] = False,
 ) -> None:
-    """Write the MuJoCo model as MJCF (open it with `python -m mujoco.viewer`)."""
+    """Write the MuJoCo model as MJCF (open it with `python -m mujoco.viewer --mjcf FILE`);
+    without PATH under runs/, like every run."""
     from pneumaquad.robot.builder import CONFIGURATIONS, build_robot
 
     _check_environment(environment)
@@ -536,9 +540,17 @@ def robot_export(
             f"{configuration!r}: expected one of {', '.join(CONFIGURATIONS)}",
             param_hint="--configuration",
         )
+    if path is not None and path.exists() and not overwrite:
+        raise typer.BadParameter(f"{path} exists; pass --overwrite to replace it, or choose "
+                                 "another file (or none: runs/robot-export-<time>/model.xml)",
+                                 param_hint="PATH")
     robot = build_robot(load_robot(params, overrides or []), configuration, environment, seed)
+    if path is None:
+        from pneumaquad.io.run_folder import MODEL_NAME, create_run_folder
+
+        path = create_run_folder(None, "robot-export") / MODEL_NAME
     path.write_text(robot.to_xml(), encoding="utf-8")
-    console.print(f"wrote {path}")
+    console.print(f"wrote {path}", soft_wrap=True, highlight=False)
 
 
 @robot_app.command("geometry")
@@ -625,6 +637,10 @@ def video_command(
         try:
             with progress_bar("video frames") as update:
                 rendered = worker.wait(update)
+        except KeyboardInterrupt:  # the worker is stopped and removes what it was writing
+            stderr_console.print("[yellow]no video: interrupted (Ctrl-C); the run folder is "
+                                 "unchanged[/yellow]", highlight=False)
+            raise typer.Exit(130) from None
         except RenderingUnavailableError as error:
             stderr_console.print(f"[yellow]no video: {error}[/yellow]")
             return
