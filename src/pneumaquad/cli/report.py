@@ -71,8 +71,8 @@ def report_command(
     ] = 0.0,
     units: Annotated[
         str,
-        typer.Option("--units", help="Units of every figure, table and text of the report: "
-                     "si (m, mm, kPa, N) or us (the thesis's in, psia, psig, lbf).",
+        typer.Option("--units", help="Units of every figure, table and text of a run's "
+                     "report: si (m, mm, kPa, N) or us (the thesis's in, psia, psig, lbf).",
                      callback=_unit_system, metavar="si|us"),
     ] = "si",
     output: Annotated[

@@ -3,7 +3,8 @@
 ``build_run_report(run)`` reads a rig or robot run folder and writes ``report.html`` with
 the key parameters, the summary metrics, thesis-style time histories, the model curves of
 the run's parameters (friction law, valve equivalent areas, input pressures) and, with
-measured data, a measured-versus-simulated comparison. ``measure_cost_table`` times the
+measured data, a measured-versus-simulated comparison, all in one display-unit system
+(``DisplayUnits``: SI or the thesis's US units). ``measure_cost_table`` times the
 components of the rig model like thesis Table 3; ``write_cost_table_report`` writes it.
 
 The names below are loaded from their modules on first use (PEP 562), so importing
@@ -21,6 +22,7 @@ _PUBLIC = {
     "compare_with_measured": "comparison",
     "CostRow": "cost_table",
     "CostTable": "cost_table",
+    "DisplayUnits": "display_units",
     "escape": "html",
     "format_value": "html",
     "friction_curve": "curves",
