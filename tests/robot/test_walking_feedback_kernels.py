@@ -71,6 +71,14 @@ def walking():
     return simulation, plan, hold
 
 
+def _wrapped(hold, kind):
+    """The reference function of type ``kind`` in the chain below ``hold``."""
+    references = hold
+    while not isinstance(references, kind):
+        references = references.references
+    return references
+
+
 def _tables(simulation: RobotSimulation):
     return [leg_dh_table(simulation.robot, leg) for leg in simulation.robot.legs]
 
@@ -179,8 +187,7 @@ def test_compiled_load_sharing_leaves_two_feet_to_least_squares():
 
 def test_stance_controller_sets_the_statics_forces(walking):
     simulation, _, hold = walking
-    stance = hold.references.references
-    assert isinstance(stance, StanceController)
+    stance = _wrapped(hold, StanceController)
     time = 2.3  # gait time with one leg swinging and one rising
     robot, model, data = simulation.robot, simulation.model, simulation.data
     phases = leg_phases(stance.gait, np.array([time]))[0]
@@ -219,7 +226,7 @@ def test_stance_controller_sets_the_statics_forces(walking):
 def test_swing_correction_matches_its_numpy_formula(walking):
     simulation, plan, _ = walking
     tables = _tables(simulation)
-    gait = walking[2].references.gait
+    gait = _wrapped(walking[2], SwingHeightCorrection).gait
     rows = plan.references[100:110]
     swing = SwingHeightCorrection(simulation, gait, 0.0, lambda times: rows)
     swing.correction[:] = [0.0, 0.01, 0.0, 0.0]  # a stance leg's correction fades
@@ -294,3 +301,83 @@ def test_compiled_vertical_jacobian_row_is_mujocos(walking):
         motion = data.cdof[dofs]
         vertical = motion[:, 5] + (motion[:, 0] * offset[1] - motion[:, 1] * offset[0])
         assert np.array_equal(vertical, jacobian[2, dofs])
+
+
+def test_compiled_slope_placement_matches_its_numpy_formula(walking):
+    """placement_step: the least-squares plane through the stance feet (ground_plane), the
+    uphill offset of the centre of mass's height over it (uphill_offset), blended, and
+    every foot shifted by minus it in the thorax frame (shift_feet)."""
+    from pneumaquad.locomotion.body_placement import ground_plane, uphill_offset
+    from pneumaquad.locomotion.course_kernels import placement_step
+    from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
+
+    simulation, plan, hold = walking
+    gait = _wrapped(hold, SwingHeightCorrection).gait
+    tables = _tables(simulation)
+    data, robot = simulation.data, simulation.robot
+    rows = plan.references[100:110]
+    timing = gait_timing(gait)
+    for gait_time, uphill, limit in ((-1.0, np.zeros(3), 1.0),
+                                     (2.3, np.array([0.01, -0.02, 0.003]), 1.0),
+                                     (2.3, np.zeros(3), 0.03)):
+        corrected = rows.copy()
+        state = uphill.copy()
+        assert placement_step(corrected, gait_time, timing, data.site_xpos,
+                              np.asarray(robot.foot_site_id, dtype=np.int64),
+                              data.subtree_com[robot.thorax_id], data.xmat[robot.thorax_id],
+                              state, 0.25, limit, np.zeros((3, 9)), np.zeros((4, 3)),
+                              stack_leg_tables(tables), chain_workspace()) == -1
+        stance = (np.ones(4, dtype=bool) if gait_time < 0.0
+                  else stance_flags(gait, np.array([gait_time]))[0])
+        feet = simulation.foot_positions()[stance]
+        normal = ground_plane(feet)
+        height = float((data.subtree_com[robot.thorax_id] - feet.mean(axis=0)) @ normal)
+        target = uphill_offset(normal, height)
+        length = np.linalg.norm(target)  # 0.077 m in this tilted pose
+        target *= min(1.0, limit / length)
+        expected = uphill + 0.25 * (target - uphill)
+        assert state == pytest.approx(expected, rel=1e-12, abs=1e-15)
+        shifts = np.tile(-(data.xmat[robot.thorax_id].reshape(3, 3).T @ expected), (4, 1))
+        assert corrected == pytest.approx(_shift_feet_numpy(rows, tables, shifts), abs=1e-13)
+
+
+def test_compiled_turn_leak_and_cross_track_match_their_formulas(walking):
+    """leak_into_turn: each foot turned by its accumulated −leak·c·Δtravel about the
+    body's z axis (the rotation of heading_step, leg by leg); cross_track_error: the
+    thorax's offset from its line, the planned sway turned by the start yaw taken out."""
+    from pneumaquad.locomotion.course_kernels import cross_track_error, leak_into_turn
+    from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
+
+    simulation, plan, _ = walking
+    tables = _tables(simulation)
+    to_body = thorax_rotation(simulation.robot)
+    rows = plan.references[300:310]
+    travel, last = np.array([0.3, -0.2, 0.1, 0.45]), np.array([0.31, -0.19, 0.08, 0.44])
+    turns = np.array([0.0, 0.01, -0.02, 0.0])
+    corrected = rows.copy()
+    assert leak_into_turn(corrected, travel, last, True, -0.05, 0.5, turns, to_body,
+                          stack_leg_tables(tables), chain_workspace(),
+                          np.zeros((3, 3, 3))) == -1
+    expected_turns = np.array([0.0, 0.01, -0.02, 0.0]) + 0.025 * (travel - last)
+    assert turns == pytest.approx(expected_turns, abs=1e-16)
+    middle = rows[len(rows) // 2]
+    shifts = np.zeros((4, 3))
+    for leg, table in enumerate(tables):
+        foot = forward_kinematics_dh(table, middle[3 * leg: 3 * leg + 3])
+        cosine, sine = math.cos(turns[leg]), math.sin(turns[leg])
+        turn = np.array([[cosine, -sine, 0.0], [sine, cosine, 0.0], [0.0, 0.0, 1.0]])
+        shifts[leg] = to_body.T @ turn @ to_body @ foot - foot
+    assert corrected == pytest.approx(_shift_feet_numpy(rows, tables, shifts), abs=1e-13)
+
+    state = np.zeros(6)
+    yaw, direction = 0.4, np.array([math.cos(0.3), math.sin(0.3)])
+    first = cross_track_error(np.array([1.0, 2.0]), np.array([0.0, 0.05]), yaw, direction,
+                              state)
+    assert first == 0.0
+    along = np.array([math.cos(0.7), math.sin(0.7)])  # the travel in the world
+    left = np.array([-along[1], along[0]])
+    sway = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+    origin = np.array([1.0, 2.0]) - sway @ [0.0, 0.05]
+    position, planned = np.array([1.3, 2.1]), np.array([0.2, -0.04])
+    error = cross_track_error(position, planned, yaw, direction, state)
+    assert error == pytest.approx((position - sway @ planned - origin) @ left, abs=1e-15)

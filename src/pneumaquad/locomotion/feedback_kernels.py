@@ -29,7 +29,7 @@ from pneumaquad.robot.legs import add_leg_step, middle_leg_chain
 
 __all__ = ["HEADING", "HEADING_SET", "LAST_TIME", "ROTATION", "GaitTiming", "gait_timing",
            "heading_step", "leg_phase", "planned_lift", "remainder", "swing_step",
-           "thorax_yaw"]
+           "thorax_yaw", "turn_leg"]
 
 Array = NDArray[np.float64]
 
@@ -165,8 +165,21 @@ def heading_step(rows: Array, thorax_matrix: Array, nominal: Array, to_body: Arr
     state[ROTATION] = rotation
     if rotation == 0.0:
         return -1
+    for leg in range(tables.d.shape[0]):
+        if not turn_leg(rows, leg, rotation, to_body, tables, workspace, matrices):
+            return leg
+    return -1
+
+
+@compiled
+def turn_leg(rows: Array, leg: int, angle: float, to_body: Array, tables: LegTables,
+             workspace: ChainWorkspace, matrices: Array) -> bool:
+    """Turn ``leg``'s commanded foot by ``angle`` [rad] about the body's z axis through
+    the body origin, on ``rows`` (n, 3·legs) [rad] in place, through its Jacobian at the
+    middle row (compiled). ``to_body`` (3, 3) thorax → body frame; ``matrices`` (3, 3, 3)
+    scratch. Returns False where the Jacobian is singular."""
     turn, product, turn_thorax = matrices[0], matrices[1], matrices[2]
-    cos, sin = math.cos(rotation), math.sin(rotation)
+    cos, sin = math.cos(angle), math.sin(angle)
     turn[0, 0], turn[0, 1], turn[0, 2] = cos, -sin, 0.0
     turn[1, 0], turn[1, 1], turn[1, 2] = sin, cos, 0.0
     turn[2, 0], turn[2, 1], turn[2, 2] = 0.0, 0.0, 1.0
@@ -179,15 +192,13 @@ def heading_step(rows: Array, thorax_matrix: Array, nominal: Array, to_body: Arr
             turn_thorax[r, c] = (product[r, 0] * to_body[0, c] + product[r, 1] * to_body[1, c]
                                  + product[r, 2] * to_body[2, c])
     foot, shift = workspace.foot, workspace.shift
-    for leg in range(tables.d.shape[0]):
-        middle_leg_chain(rows, tables, leg, workspace)
-        for r in range(3):
-            shift[r] = (foot[0] * turn_thorax[r, 0] + foot[1] * turn_thorax[r, 1]
-                        + foot[2] * turn_thorax[r, 2]) - foot[r]
-        moved = shift[0] != 0.0 or shift[1] != 0.0 or shift[2] != 0.0
-        if moved and not add_leg_step(rows, leg, shift, workspace):
-            return leg
-    return -1
+    middle_leg_chain(rows, tables, leg, workspace)
+    for r in range(3):
+        shift[r] = (foot[0] * turn_thorax[r, 0] + foot[1] * turn_thorax[r, 1]
+                    + foot[2] * turn_thorax[r, 2]) - foot[r]
+    if shift[0] == 0.0 and shift[1] == 0.0 and shift[2] == 0.0:
+        return True
+    return add_leg_step(rows, leg, shift, workspace)
 
 
 @compiled

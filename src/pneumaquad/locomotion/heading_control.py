@@ -8,6 +8,22 @@ body's vertical axis: with the stance feet held by the ground, commanding them r
 ``+c`` turns the body by ``−c``, and the swing feet land on the rotated pattern, so the
 course is kept. The correction goes into the joint references through each leg's
 Jacobian (``c`` is limited to a few degrees, well inside the linear range).
+
+Holding the yaw does not hold the course: stance feet that slide sideways carry the body
+off its line at a steady yaw (0.39–0.48 m over the 4.6 m of the 8° hill, which took the
+right feet off the plate's edge). Given the gait, :class:`HeadingHold` also holds the
+course: the heading it holds is biased by ``−course_gain`` times the body's cross-track
+error (its distance left of the line the walk began on, the planned sway taken out;
+within ±``course_limit``), so the body steers back onto its line.
+
+A rotation of the feet turns the body once; a disturbance that turns it a little every
+cycle (stance feet slipping on a slope, a turn in place whose stance turns the body by
+85 % of the plan) needs a rotation that grows without end, and the correction ran into
+its limit after 100 s on the 12° hill and half way through a 90° turn. Given the gait,
+the rotation also leaks into a turn: every cycle the stance feet turn the body by
+``−turn_leak·c`` more, as the crawl's own turn does (each foot rotated by its stance
+travel, :func:`pneumaquad.gait.crawl.stance_travel`, times the turn), so a steady
+disturbance is met by a steady, bounded ``c``.
 """
 
 from __future__ import annotations
@@ -23,6 +39,13 @@ from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
 from pneumaquad.robot.legs import leg_dh_table
 from pneumaquad.robot.simulation import RobotSimulation
 
+from .course_kernels import (
+    COURSE_CROSS_TRACK,
+    GaitTrack,
+    cross_track_error,
+    leak_into_turn,
+    track_index,
+)
 from .feedback_kernels import HEADING, HEADING_SET, LAST_TIME, ROTATION, heading_step
 
 __all__ = ["HeadingHold"]
@@ -44,17 +67,36 @@ class HeadingHold:
     yaw_rate : float [rad/s]
         Rate at which the heading to hold turns (a planned turn or arc): the heading is
         the first call's yaw plus yaw_rate times the time since.
+    track : GaitTrack, optional
+        The plan's body path and feet travel (:func:`.course_kernels.gait_track`): hold the
+        course of a straight walk too (module docstring; not with a yaw rate), and leak
+        the rotation into a turn.
+    course_gain : float [rad/m], course_limit : float [rad]
+        Heading bias per metre of cross-track error, and its largest magnitude.
+    turn_leak : float
+        Body turn per cycle [rad] per radian of foot rotation (with ``track``).
 
-    The arithmetic of a call is compiled (:func:`.feedback_kernels.heading_step`) on
-    arrays allocated here; :attr:`heading`, :attr:`rotation` and :attr:`last_time` are
-    views of its state.
+    The arithmetic of a call is compiled (:func:`.feedback_kernels.heading_step`,
+    :func:`.course_kernels.cross_track_error`, :func:`.course_kernels.leak_into_turn`)
+    on arrays allocated here; :attr:`heading`, :attr:`rotation` and :attr:`last_time`
+    are views of its state.
     """
 
     def __init__(self, simulation: RobotSimulation,
                  references: Callable[[np.ndarray], np.ndarray], gain: float = 0.5,
-                 limit: float = math.radians(8.0), yaw_rate: float = 0.0) -> None:
+                 limit: float = math.radians(8.0), yaw_rate: float = 0.0,
+                 track: GaitTrack | None = None, course_gain: float = 1.5,
+                 course_limit: float = math.radians(8.0), turn_leak: float = 0.5) -> None:
         self.simulation = simulation
         self.yaw_rate = yaw_rate
+        self.track = track
+        self.course_gain, self.course_limit = course_gain, course_limit
+        self.turn_leak = turn_leak
+        legs = len(simulation.robot.legs)
+        self._course = np.zeros(6)  # course_kernels.cross_track_error's state
+        self._last_travel = np.zeros(legs)  # each foot's stance travel at the last call
+        self._travel_set = False
+        self.leg_turns = np.zeros(legs)  # [rad] each foot's turn from the leak
         self._start: tuple[float, float] | None = None  # (heading [rad], time [s])
         self.references = references
         self.gain = gain
@@ -66,6 +108,7 @@ class HeadingHold:
         self._workspace = chain_workspace()
         self._matrices = np.zeros((3, 3, 3))
         self._thorax_matrix = simulation.data.xmat[robot.thorax_id]  # a view, thorax → world
+        self._thorax_position = simulation.data.xpos[robot.thorax_id][:2]  # a view
         nominal = np.zeros(9)
         mujoco.mju_quat2Mat(nominal, simulation.model.body_quat[robot.thorax_id])
         self._nominal = nominal.reshape(3, 3)
@@ -101,17 +144,41 @@ class HeadingHold:
     def last_time(self, value: float) -> None:
         self._state[LAST_TIME] = value
 
+    @property
+    def cross_track(self) -> float:
+        """Distance [m] of the body left of its line at the last call (0 without a
+        track)."""
+        return float(self._course[COURSE_CROSS_TRACK])
+
     def __call__(self, times: np.ndarray) -> np.ndarray:
         """Joint references (len(times), joints) [rad] for the next chunk."""
         rows = np.array(self.references(times), dtype=float)
+        track = self.track
+        index = (-1 if track is None else
+                 track_index(track.start, track.step, len(track.body), self.simulation.time))
         if self.yaw_rate != 0.0 and self._start is not None:
             heading, start = self._start
             self._state[HEADING] = heading + self.yaw_rate * (self.simulation.time - start)
+        elif track is not None and self._start is not None:
+            error = cross_track_error(self._thorax_position, track.body[index],
+                                      self._start[0], track.direction, self._course)
+            bias = min(max(self.course_gain * error, -self.course_limit), self.course_limit)
+            self._state[HEADING] = self._start[0] - bias
         singular = heading_step(rows, self._thorax_matrix, self._nominal, self.to_body,
                                 self._stacked, self._workspace, self._matrices, self._state,
                                 self.simulation.time, self.gain, self.limit)
+        if singular < 0 and track is not None and self.turn_leak > 0.0:
+            singular = leak_into_turn(rows, track.travel[index], self._last_travel,
+                                      self._travel_set, self.rotation, self.turn_leak,
+                                      self.leg_turns, self.to_body, self._stacked,
+                                      self._workspace, self._matrices)
+            self._last_travel[:] = track.travel[index]
+            self._travel_set = True
         if singular >= 0:
             raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
         if self._start is None:
             self._start = (float(self._state[HEADING]), self.last_time)
+            if track is not None and self.yaw_rate == 0.0:  # the line through here
+                cross_track_error(self._thorax_position, track.body[index], self._start[0],
+                                  track.direction, self._course)
         return rows

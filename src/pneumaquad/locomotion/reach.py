@@ -28,8 +28,9 @@ from pneumaquad.robot.legs import leg_dh_table
 
 from .walk import CycleSolution, cycle_targets, solve_cycle
 
-__all__ = ["POSTURES", "REACH_TOLERANCE", "UnreachablePlanError", "check_reach",
-           "choose_posture", "largest_miss", "plan_miss"]
+__all__ = ["LIMIT_BAND", "LIMIT_SHARE", "PLAN_LIMIT_SHARE", "POSTURES", "REACH_TOLERANCE",
+           "UnreachablePlanError", "check_reach", "choose_posture", "largest_miss",
+           "limit_share", "plan_miss"]
 
 #: Largest distance [m] between a planned foot and where the clamped IK puts it that a
 #: plan may keep (the swing then lifts the foot up to 1 cm less than the 4 cm planned;
@@ -45,6 +46,16 @@ POSTURES = tuple(
          for gamma in (65.0, 70.0, 75.0, 80.0, 85.0)),
         key=lambda pose: (abs(pose[0] + 20.0) / 5.0 + abs(pose[1] - 80.0) / 5.0, pose))
 )
+#: A joint within this angle [rad] of a limit counts as at the limit (the walking
+#: judgement's "joint limit" reason, :func:`.walking.walking_outcome`).
+LIMIT_BAND = np.radians(0.5)
+#: Share of a walk a joint may spend at a limit before the walk fails by "joint limit".
+LIMIT_SHARE = 0.2
+#: Share of a plan's samples a joint may spend at a limit for :func:`choose_posture` to
+#: keep its posture: half of :data:`LIMIT_SHARE`, since the joints lag their references
+#: (the clockwise turn in place planned gamma at its 95° for 22 % of the cycle and spent
+#: 36 % of the turn there).
+PLAN_LIMIT_SHARE = 0.5 * LIMIT_SHARE
 #: IK samples per cycle when comparing postures (the plan itself uses its own grid).
 _SEARCH_SAMPLES = 40
 
@@ -75,10 +86,24 @@ def largest_miss(cycle: CycleSolution) -> Miss:
 def plan_miss(robot: RobotModel, gait: CrawlGait, samples: int = 40) -> float:
     """Largest distance [m] by which the clamped IK misses a planned foot of ``gait``'s
     steady cycle (and first cycle, with a start-up) on a grid of ``samples``."""
+    return max(largest_miss(cycle).distance for cycle in _cycles(robot, gait, samples))
+
+
+def _cycles(robot: RobotModel, gait: CrawlGait, samples: int) -> list[CycleSolution]:
+    """The IK of ``gait``'s steady cycle, and of its first with a start-up."""
     cycles = [solve_cycle(robot, gait, samples)]
     if gait.start_up:
         cycles.append(solve_cycle(robot, gait, samples, first=True))
-    return max(largest_miss(cycle).distance for cycle in cycles)
+    return cycles
+
+
+def limit_share(robot: RobotModel, cycles: list[CycleSolution]) -> float:
+    """Largest share, over the joints, of the samples of ``cycles`` that put the joint
+    within :data:`LIMIT_BAND` of a limit."""
+    lower = robot.lower_limits() + LIMIT_BAND
+    upper = robot.upper_limits() - LIMIT_BAND
+    angles = np.concatenate([cycle.angles for cycle in cycles])
+    return float(np.max(np.mean((angles < lower) | (angles > upper), axis=0)))
 
 
 def _unreachable_samples(robot: RobotModel, gait: CrawlGait, samples: int) -> int:
@@ -97,9 +122,13 @@ def choose_posture(robot: RobotModel, gait_for: Callable[[np.ndarray], CrawlGait
                    default: np.ndarray) -> np.ndarray:
     """Walking angles [rad] (alpha, beta, gamma) for the gait ``gait_for(angles)``:
     ``default`` if the legs reach its plan (steady and first cycle) within
-    :data:`REACH_TOLERANCE`, else the first of :data:`POSTURES` whose planned feet all
-    have an exact IK answer, else the one with the fewest that have none."""
-    if plan_miss(robot, gait_for(default), _SEARCH_SAMPLES) <= REACH_TOLERANCE:
+    :data:`REACH_TOLERANCE` and no joint spends more than :data:`PLAN_LIMIT_SHARE` of it
+    at a limit, else the first of :data:`POSTURES` whose planned feet all have an exact
+    IK answer (and that keeps its joints off their limits as long), else the one with the
+    fewest that have none."""
+    cycles = _cycles(robot, gait_for(default), _SEARCH_SAMPLES)
+    if (max(largest_miss(cycle).distance for cycle in cycles) <= REACH_TOLERANCE
+            and limit_share(robot, cycles) <= PLAN_LIMIT_SHARE):
         return default
     best, fewest = default, np.inf
     for angles in POSTURES:
@@ -107,7 +136,8 @@ def choose_posture(robot: RobotModel, gait_for: Callable[[np.ndarray], CrawlGait
             unreachable = _unreachable_samples(robot, gait_for(angles), _SEARCH_SAMPLES)
         except ValueError:  # e.g. no sway reaches the margin about this posture
             continue
-        if unreachable == 0:
+        if unreachable == 0 and limit_share(
+                robot, _cycles(robot, gait_for(angles), _SEARCH_SAMPLES)) <= PLAN_LIMIT_SHARE:
             return angles
         if unreachable < fewest:
             best, fewest = angles, unreachable

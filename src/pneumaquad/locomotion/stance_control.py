@@ -47,7 +47,7 @@ from .stance_kernels import (
 )
 from .walk_settings import StanceControlSettings
 
-__all__ = ["StanceControlSettings", "StanceController", "StanceLoads",
+__all__ = ["StanceControlSettings", "StanceController", "StanceLoads", "StanceSettle",
            "cylinder_forces_for_foot_force", "desired_normal_forces", "load_shares",
            "track_stance_loads"]
 
@@ -276,3 +276,36 @@ class StanceController:
         """Planned joint references (len(times), joints) [rad] for the next chunk."""
         self._update()
         return self.references(times)
+
+
+class StanceSettle:
+    """Four feet down, each carrying its statics share: a pose held under force control.
+
+    Call it like a reference function, once per control chunk (a feedback phase): every
+    leg's cylinders track the forces that carry the robot's weight about its measured
+    centre of mass (:meth:`StanceLoads.track`, all shares 1), and the pose ``pose``
+    (joints,) [rad] is returned for every time. Held so, the legs stop pushing against
+    each other through the feet's friction: a staged rise (feet stepped while the others
+    held position with their integrals) leaves internal forces of over 100 N that a leg
+    must shed before it can lift, and the PID integrals are off while a leg tracks force,
+    so a leg that then swings starts from its statics load and no wound-up integral.
+
+    Parameters
+    ----------
+    simulation : RobotSimulation
+    pose : array_like (joints,) [rad]
+    settings : StanceControlSettings, optional
+        The force gain and stiffness of the walk's stance.
+    """
+
+    def __init__(self, simulation: RobotSimulation, pose: ArrayLike,
+                 settings: StanceControlSettings | None = None) -> None:
+        self.loads = StanceLoads(simulation)
+        self.pose = np.asarray(pose, dtype=float)
+        self.settings = settings or StanceControlSettings()
+        self.shares = np.ones(len(simulation.robot.legs))
+
+    def __call__(self, times: np.ndarray) -> np.ndarray:
+        """The held pose (len(times), joints) [rad]; the force set-points updated."""
+        self.loads.track(self.shares, self.settings.force_gain, self.settings.stiffness)
+        return np.broadcast_to(self.pose, (len(times), self.pose.size))

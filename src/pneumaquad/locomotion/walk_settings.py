@@ -82,6 +82,7 @@ class WalkSettings(CrawlSettings):
         default_factory=StanceControlSettings)
     swing_from_ground: bool = True
     heading_hold: bool = True
+    body_placement: bool = True
     turn: float = 0.0
     yaw_rate: float = 0.0
 
@@ -143,6 +144,8 @@ WALK_SETTINGS: dict[str, Setting] = {
                                  "(locomotion.swing_control), or relative to the body as "
                                  "planned", off_option="swing-from-body"),
     "heading_hold": Setting("Hold the initial heading (locomotion.heading_control)"),
+    "body_placement": Setting("Place the body uphill on a slope and hold it in place when "
+                              "turning in place (locomotion.body_placement)"),
     "turn": Setting("Turn in place by this angle, counter-clockwise (0: walk the distance)",
                     _closed(-720.0, 720.0, "deg"), scale=math.pi / 180.0),
     "yaw_rate": Setting("Body yaw rate, counter-clockwise: walking, an arc; turning in "

@@ -27,10 +27,19 @@ from pneumaquad.robot.simulation import RobotSimulation
 from pneumaquad.robot.stance_check import StanceCheck
 from pneumaquad.robot.stand_up import smooth_ramp
 
+from .body_placement import BodyPlacement
 from .capacity import rise_in_pairs
+from .course_kernels import gait_track
 from .heading_control import HeadingHold
-from .reach import REACH_TOLERANCE, check_reach, choose_posture, plan_miss
-from .stance_control import StanceController
+from .reach import (
+    LIMIT_BAND,
+    LIMIT_SHARE,
+    REACH_TOLERANCE,
+    check_reach,
+    choose_posture,
+    plan_miss,
+)
+from .stance_control import StanceController, StanceSettle
 from .swing_control import SwingHeightCorrection
 from .walk_settings import TURN_RATE, TURN_TOLERANCE, WalkSettings
 
@@ -98,6 +107,8 @@ def reachable_plan(robot: RobotModel,
 #: The phase of a staged walk start that moves the legs from their mean pose into the
 #: gait's first pose.
 TO_FIRST_POSE = "to the first pose"
+#: The phase of a staged walk start that holds the stance under force control.
+SETTLE = "settle"
 
 
 def leg_posture(pose: np.ndarray) -> np.ndarray:
@@ -163,6 +174,17 @@ def walking_phases(
         # of legs at a time where the supply is short.
         phases = stand_up_phases(simulation, hold=3.0, posture=False, standing_angles=first,
                                  check=False, staged=staged)
+    if staged and settings.stance_control is not None:
+        # the staged rise's steps leave the legs pushing against each other through the
+        # feet: the first half of the hold sheds those forces under force control
+        # (StanceSettle), the second brings the joints back onto their pose
+        at = [phase.name for phase in phases].index("hold")
+        hold = phases[at]
+        phases[at:at + 1] = [
+            replace(hold, name=SETTLE, duration=hold.duration / 2, feedback=True,
+                    references=StanceSettle(simulation, hold.references,
+                                            settings.stance_control)),
+            replace(hold, duration=hold.duration / 2)]
     walk_start = sum(phase.duration for phase in phases)
     step = simulation.control_step
 
@@ -177,13 +199,16 @@ def walking_phases(
                                       settings.stance_control)
     if settings.swing_from_ground:
         references = SwingHeightCorrection(simulation, gait, walk_start, references)
+    if settings.body_placement:
+        references = BodyPlacement(simulation, gait, walk_start, references)
     if settings.heading_hold:
         references = HeadingHold(simulation, references,
-                                 yaw_rate=settings.body_yaw_rate())
+                                 yaw_rate=settings.body_yaw_rate(),
+                                 track=gait_track(gait, walk_start, duration))
         if settings.turning_in_place:  # from the yaw the robot lay in, as it is judged
             references.heading = 0.0
     feedback = (settings.stance_control is not None or settings.swing_from_ground
-                or settings.heading_hold)
+                or settings.heading_hold or settings.body_placement)
     walking = Phase("walk", duration, references, closed, feedback=feedback,
                     gate=StanceCheck(plan.references[0]))
     phases += [
@@ -319,8 +344,8 @@ def walking_outcome(
     for name, lower, upper in zip(robot.joint_names, robot.lower_limits(),
                                   robot.upper_limits(), strict=True):
         angle = recording[f"{name} angle [rad]"][walking]
-        near = (angle < lower + math.radians(0.5)) | (angle > upper - math.radians(0.5))
-        if np.mean(near) > 0.2:
+        near = (angle < lower + LIMIT_BAND) | (angle > upper - LIMIT_BAND)
+        if np.mean(near) > LIMIT_SHARE:
             at_limit.append(name)
     if at_limit:
         reasons.append("joint limit")
@@ -353,7 +378,11 @@ def walking_outcome(
         outcome["turn asked [deg]"] = math.degrees(settings.turn)
         outcome["turned [deg]"] = math.degrees(turned)
         outcome["turn error [deg]"] = math.degrees(turned - settings.turn)
-        outcome["drift [m]"] = float(np.hypot(*displacement))
+        # where the robot stands: the centre of its four feet, all down at the start and
+        # the end of a turn (the thorax is swayed off it, and its sway turns with it)
+        centres = [np.mean([[recording[f"{leg} foot {axis} [m]"][k] for axis in "xy"]
+                            for leg in robot.legs], axis=0) for k in (first, last)]
+        outcome["drift [m]"] = float(np.hypot(*(centres[1] - centres[0])))
         outcome["air per metre [NL/m]"] = math.nan
         if abs(turned - settings.turn) > TURN_TOLERANCE:
             reasons.append("turned short" if abs(turned) < abs(settings.turn)

@@ -428,6 +428,10 @@ class EnvironmentParameters(_Model):
     ] = described(
         "Ramp plate: its slope, up in +x.",
         "not in thesis: the listing's plate is flat")
+    hill_top_length: PositiveLength = described(
+        "Hill: length of its flat top, between the ramp and its mirror image down.",
+        "not in thesis",
+        default=0.8)
     rough_size: tuple[EnvironmentLength, EnvironmentLength] = described(
         "Rough-terrain field: its size (x, y).",
         "not in thesis")

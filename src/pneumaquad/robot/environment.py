@@ -1,4 +1,4 @@
-"""The world around the robot: ground, block obstacle, ramp and rough-terrain field.
+"""The world around the robot: ground, block obstacle, ramp, hill and rough-terrain field.
 
 Environments (selectable per run):
 
@@ -6,7 +6,9 @@ Environments (selectable per run):
 ``block``  a box obstacle ahead of the robot (thesis Fig. 4);
 ``ramp``   the 1.2 × 1.2 × 0.019 m plate of App. C.2.3, tilted up from the ground;
 ``rough``  a field of square cells, a seeded random half of them raised by random
-           heights (the thesis's "HALF RANDOM" map, App. C.2.4).
+           heights (the thesis's "HALF RANDOM" map, App. C.2.4);
+``hill``   the ramp, a flat top level with its upper edge, and the ramp mirrored down
+           again (a climb and a descent at the ramp's slope).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from .frames import euler_zyx_matrix, rotation_to_quaternion
 
 __all__ = ["ENVIRONMENTS", "WORLD_CONTYPE", "add_environment"]
 
-ENVIRONMENTS = ("flat", "block", "ramp", "rough")
+ENVIRONMENTS = ("flat", "block", "ramp", "rough", "hill")
 
 #: Collision bits: world geoms collide with the robot, not with each other; robot
 #: geoms collide with the world, not with each other (SrLib SetSelfCollision(false)).
@@ -98,7 +100,7 @@ def add_environment(
         x, y, z = parameters.block_position
         _static_box(spec, "block", (sx / 2, sy / 2, sz / 2), (x + sx / 2, y, z + sz / 2),
                     friction, contact)
-    elif environment == "ramp":
+    elif environment in ("ramp", "hill"):
         sx, sy, sz = parameters.ramp_size
         x, y, z = parameters.ramp_position
         slope = parameters.ramp_slope
@@ -111,8 +113,28 @@ def add_environment(
         )
         _static_box(spec, "ramp", (sx / 2, sy / 2, sz / 2), centre, friction, contact,
                     rotation_to_quaternion(rotation))
+        if environment == "hill":
+            _add_hill_top_and_descent(spec, parameters, centre, rotation, friction, contact)
     elif environment == "rough":
         _add_rough_field(spec, parameters, contact, seed)
+
+
+def _add_hill_top_and_descent(spec: mujoco.MjSpec, parameters: EnvironmentParameters,
+                              centre: tuple[float, float, float], rotation: np.ndarray,
+                              friction: float, contact: ContactParameters) -> None:
+    """The hill's flat top (``hill_top_length`` long, level with the ramp plate's upper
+    edge) and its way down: the ramp plate mirrored about the top's middle."""
+    sx, sy, sz = parameters.ramp_size
+    slope = parameters.ramp_slope
+    corner = np.asarray(centre) + rotation @ np.array([sx / 2, 0.0, sz / 2])
+    top = parameters.hill_top_length
+    middle = corner[0] + top / 2
+    _static_box(spec, "hill_top", (top / 2, sy / 2, corner[2] / 2),
+                (middle, centre[1], corner[2] / 2), friction, contact)
+    descent = euler_zyx_matrix((0.0, slope, 0.0))
+    _static_box(spec, "descent", (sx / 2, sy / 2, sz / 2),
+                (2 * middle - centre[0], centre[1], centre[2]), friction, contact,
+                rotation_to_quaternion(descent))
 
 
 def _add_rough_field(

@@ -50,7 +50,7 @@ class RunOption:
     number_scale: float | None = None
 
 
-_ENVIRONMENTS = ("flat", "block", "ramp", "rough")
+_ENVIRONMENTS = ("flat", "block", "ramp", "rough", "hill")
 _ROBOT_COMMON = {
     "environment": RunOption("choice", "flat", "--environment", _ENVIRONMENTS),
     "seed": RunOption("seed", 0, "--seed"),
