@@ -296,6 +296,8 @@ def test_rig_options_are_checked_before_anything_runs(tmp_path: Path, args, frag
         (("serve", "actuators", "--duration", "1e300"), "at most 3600 s"),
         (("report", "--cost-table", "--duration", "inf"), "at most 3600 s"),
         (("console", "--duration", "-5"), "greater than 0 s"),
+        (("robot", "walk", "--waypoints", "0.5"), "waypoint '0.5': expected two numbers"),
+        (("robot", "walk", "--waypoints", "0.5,0;0.5,0.001"), "at least 1 cm apart"),
     ],
 )
 def test_numeric_options_are_finite_and_bounded(tmp_path: Path, args, fragment: str,

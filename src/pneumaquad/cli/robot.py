@@ -11,6 +11,7 @@ the plots and the command waits for it at the end. Without a video the worker wr
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -456,15 +457,28 @@ def robot_walk(
     video_fps: VideoFpsOption = VIDEO_FPS,
     video_quality: VideoQualityOption = DEFAULT_VIDEO_QUALITY,
     profile: ProfileOption = False,
+    waypoints: Annotated[str | None, typer.Option(
+        metavar="X,Y;X,Y", help="Walk through these points in turn instead of --distance "
+        "and --heading: metres from the start, x forward, y to the left; the robot keeps "
+        "its yaw and re-places its feet at each (locomotion.waypoints).")] = None,
 ) -> None:
     """The quadruped stands up and walks a statically stable crawl (lateral-sequence wave
     gait, duty factor >= 0.75); reports success or failure with the reason."""
     from pneumaquad.locomotion.capacity import InsufficientSupplyError
-    from pneumaquad.locomotion.walk_run import WalkSettingsError, run_walk
+    from pneumaquad.locomotion.walk_run import WalkSettingsError, run_walk, run_waypoints
+    from pneumaquad.locomotion.waypoints import parse_waypoints
 
     clock = command_clock()
 
     _check_environment(environment)
+    points = None
+    if waypoints is not None:
+        try:
+            points = parse_waypoints(waypoints)
+        except ValueError as error:
+            raise typer.BadParameter(str(error), param_hint="--waypoints") from None
+        settings = dataclasses.replace(settings, distance=float(np.sum(np.hypot(
+            *np.diff(np.vstack([[0.0, 0.0], points]), axis=0).T))))
     distance, speed = settings.distance, settings.speed
     if distance / speed > MAX_SIMULATED_TIME:
         raise typer.BadParameter(
@@ -476,11 +490,17 @@ def robot_walk(
         kind = f"walk-{environment}"
         try:
             with progress_bar(kind) as update:
-                walk = run_walk(simulation, settings, output, progress=_progress(update),
-                                clock=clock, **_sample_hook(worker, video, simulation))
+                hooks = _sample_hook(worker, video, simulation)
+                walk = (run_walk(simulation, settings, output, progress=_progress(update),
+                                 clock=clock, **hooks) if points is None else
+                        run_waypoints(simulation, settings, points, output,
+                                      progress=_progress(update), clock=clock, **hooks))
         except WalkSettingsError as error:  # out of range, or a gait that cannot be planned
-            raise typer.BadParameter(str(error), param_hint=option_names(
-                WALK_SETTINGS, error.fields)) from None
+            fields = tuple(field for field in error.fields if field != "waypoints")
+            hint = ", ".join(filter(None, ["--waypoints" if "waypoints" in error.fields
+                                           else "", option_names(WALK_SETTINGS, fields)
+                                           if fields else ""]))
+            raise typer.BadParameter(str(error), param_hint=hint) from None
         except InsufficientSupplyError as error:
             raise typer.BadParameter(str(error), param_hint=SUPPLY_HINT) from None
         _report(simulation, walk.run, walk.run.summary["description"], worker, video, clock,
@@ -490,6 +510,16 @@ def robot_walk(
         console.print("walking: not judged (the run stopped before the walk began)")
         return
     verdict = "success" if outcome["success"] else "failure"
+    if points is not None:
+        console.print(f"waypoints: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])})")
+        for number, leg in enumerate(outcome.get("legs", []), start=1):
+            target, reached = leg["waypoint [m]"], leg["reached [m]"]
+            console.print(f"  waypoint {number} ({target[0]:g}, {target[1]:g}) m: reached "
+                          f"({reached[0]:.3f}, {reached[1]:.3f}) m, error "
+                          f"{leg['waypoint error [m]']:.3f} m; walk "
+                          f"{'success' if leg['success'] else 'failure'} "
+                          f"({', '.join(leg['reasons'])})", highlight=False)
+        return
     if outcome.get("period [s]", settings.period) != settings.period:
         console.print(f"the gait cycle was shortened from {settings.period:g} s to "
                       f"{outcome['period [s]']:g} s (the same speed, a shorter stride): the "

@@ -44,13 +44,16 @@ from .walking import (
     walking_outcome,
     walking_phases,
 )
+from .waypoints import waypoint_outcome, waypoint_path_figure, waypoint_phases
 
-__all__ = ["GAIT_FIELDS", "REACH_FIELDS", "WALKING_FIGURE", "WALK_SETTINGS", "JudgedWalk",
-           "WalkSettingsError",
-           "check_walk_settings", "plan_walking", "run_walk"]
+__all__ = ["GAIT_FIELDS", "REACH_FIELDS", "WALKING_FIGURE", "WALK_SETTINGS",
+           "WAYPOINTS_FIGURE", "JudgedWalk", "WalkSettingsError", "check_walk_settings",
+           "plan_walking", "run_walk", "run_waypoints"]
 
 #: The walking figure of a judged walk's run folder.
 WALKING_FIGURE = "walking.png"
+#: The path figure of a waypoint walk's run folder.
+WAYPOINTS_FIGURE = "waypoints.png"
 
 
 @dataclass
@@ -194,3 +197,67 @@ def run_walk(
     RunFolderWriter(folder).update_summary({"walking": outcome})
     run.summary["walking"] = outcome
     return JudgedWalk(run, plan, outcome, figure)
+
+
+def run_waypoints(
+    simulation: RobotSimulation,
+    settings: WalkSettings,
+    waypoints: np.ndarray,
+    output: Path | None = None,
+    progress: Callable[[float, float], None] | None = None,
+    clock: StageClock | None = None,
+    on_sample: Callable[[float, np.ndarray], None] | None = None,
+) -> JudgedWalk:
+    """Stand up, walk to each of ``waypoints`` (n, 2) [m] in turn, stop
+    (:mod:`.waypoints`); write the run folder, judge every walk and every waypoint
+    (:func:`.waypoints.waypoint_outcome`), draw ``walking.png`` and ``waypoints.png`` and
+    add the judgement to ``summary.json`` under ``"walking"``. Arguments as
+    :func:`run_walk`'s; the result's ``plan`` is the first walk's.
+
+    Raises
+    ------
+    WalkSettingsError
+        Before anything runs: a setting out of range, or a leg of the path the gait or
+        the legs cannot walk (:func:`.waypoints.waypoint_phases`).
+    InsufficientSupplyError
+        Before anything runs (:func:`.capacity.check_supply`).
+    """
+    clock = StageClock() if clock is None else clock
+    check_walk_settings(settings)
+    with clock.stage("walk plan"):
+        phases, path = waypoint_phases(simulation, settings, waypoints)
+        check_supply(simulation, leg_posture(path[0].plan.references[0]), walking=True)
+    robot = simulation.robot
+    folder = create_run_folder(output, f"waypoints-{robot.environment}")
+    description = (f"quadruped: walk through {len(path)} waypoints on {robot.environment}")
+    run = run_phases(simulation, phases, folder, description, progress, clock=clock,
+                     on_sample=on_sample)
+    if run.interrupted or path[0].phase not in run.summary["phases"]:
+        stopped = run.summary.get("stopped before")
+        outcome = None if stopped is None else {
+            "success": False, "reasons": [f"{stopped['phase']}: {stopped['reason']}"],
+            "legs": []}
+        if outcome is not None:
+            RunFolderWriter(folder).update_summary({"walking": outcome})
+            run.summary["walking"] = outcome
+        return JudgedWalk(run, path[0].plan, outcome, None)
+    with clock.stage("walk judgement"):
+        outcome = waypoint_outcome(run.recording, run.summary, simulation, path)
+        stopped = run.summary.get("stopped before")
+        if stopped is not None:
+            outcome["success"] = False
+            outcome["reasons"] = [*outcome["reasons"],
+                                  f"{stopped['phase']}: {stopped['reason']}"]
+        tip_over = np.full(run.recording["time [s]"].shape, np.nan)
+        for leg in path:
+            if leg.phase in run.summary["phases"]:
+                series = tip_over_series(run.recording, run.summary, robot, leg.plan,
+                                         leg.phase)
+                tip_over = np.where(np.isfinite(series), series, tip_over)
+    with clock.stage("plots"):
+        figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
+                              f"walk through {len(path)} waypoints")
+        waypoint_path_figure(run.recording, path, outcome, folder / WAYPOINTS_FIGURE)
+    RunFolderWriter(folder).update_summary({"walking": outcome})
+    run.summary["walking"] = outcome
+    return JudgedWalk(run, path[0].plan, outcome, figure)

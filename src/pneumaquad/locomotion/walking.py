@@ -177,45 +177,66 @@ def walking_phases(
     if staged and settings.stance_control is not None:
         # the staged rise's steps leave the legs pushing against each other through the
         # feet: the first half of the hold sheds those forces under force control
-        # (StanceSettle), the second brings the joints back onto their pose
         at = [phase.name for phase in phases].index("hold")
-        hold = phases[at]
-        phases[at:at + 1] = [
-            replace(hold, name=SETTLE, duration=hold.duration / 2, feedback=True,
+        phases[at:at + 1] = settled_hold(simulation, phases[at], settings)
+    walk_start = sum(phase.duration for phase in phases)
+    phases += [
+        walk_phase(simulation, settings, gait, plan, walk_start),
+        Phase("stop", 1.0, plan.references[-1], closed),
+    ]
+    return phases, plan
+
+
+def settled_hold(simulation: RobotSimulation, hold: Phase,
+                 settings: WalkSettings) -> list[Phase]:
+    """``hold`` split in two: its first half under force control
+    (:class:`.stance_control.StanceSettle`: the legs stop pushing against each other
+    through the feet's friction), its second half bringing the joints back onto its pose
+    under position control."""
+    return [replace(hold, name=SETTLE, duration=hold.duration / 2, feedback=True,
                     references=StanceSettle(simulation, hold.references,
                                             settings.stance_control)),
             replace(hold, duration=hold.duration / 2)]
-    walk_start = sum(phase.duration for phase in phases)
+
+
+def walk_phase(simulation: RobotSimulation, settings: WalkSettings, gait: CrawlGait,
+               plan: WalkPlan, start: float, name: str = "walk",
+               heading: float | None = None) -> Phase:
+    """The phase that walks ``plan`` from simulation time ``start`` [s], with the
+    feedback ``settings`` asks for (force-controlled stance, swing height from the
+    ground, body placement on slopes, heading and course hold) and a
+    :class:`~pneumaquad.robot.stance_check.StanceCheck` of the plan's first pose as its
+    gate. ``heading`` [rad]: the yaw to hold (default: the yaw the walk begins with; the
+    yaw the robot lay in when turning in place)."""
     step = simulation.control_step
+    duration = settings.duration()
 
     def walk(times: np.ndarray) -> np.ndarray:
-        index = np.clip(np.round((times - walk_start) / step).astype(int), 0,
+        index = np.clip(np.round((times - start) / step).astype(int), 0,
                         len(plan.references) - 1)
         return plan.references[index]
 
     references = walk
     if settings.stance_control is not None:
-        references = StanceController(simulation, gait, walk_start, references,
+        references = StanceController(simulation, gait, start, references,
                                       settings.stance_control)
     if settings.swing_from_ground:
-        references = SwingHeightCorrection(simulation, gait, walk_start, references)
+        references = SwingHeightCorrection(simulation, gait, start, references)
     if settings.body_placement:
-        references = BodyPlacement(simulation, gait, walk_start, references)
+        references = BodyPlacement(simulation, gait, start, references)
     if settings.heading_hold:
         references = HeadingHold(simulation, references,
                                  yaw_rate=settings.body_yaw_rate(),
-                                 track=gait_track(gait, walk_start, duration))
+                                 track=gait_track(gait, start, duration))
         if settings.turning_in_place:  # from the yaw the robot lay in, as it is judged
             references.heading = 0.0
+        if heading is not None:
+            references.heading = heading
     feedback = (settings.stance_control is not None or settings.swing_from_ground
                 or settings.heading_hold or settings.body_placement)
-    walking = Phase("walk", duration, references, closed, feedback=feedback,
-                    gate=StanceCheck(plan.references[0]))
-    phases += [
-        walking,
-        Phase("stop", 1.0, plan.references[-1], closed),
-    ]
-    return phases, plan
+    closed = np.ones(simulation.robot.joint_count, dtype=bool)
+    return Phase(name, duration, references, closed, feedback=feedback,
+                 gate=StanceCheck(plan.references[0]))
 
 
 def contact_slide(foot_xy: np.ndarray, loaded: np.ndarray) -> float:
@@ -246,20 +267,21 @@ def gait_support_margins(recording: dict[str, np.ndarray], legs: tuple[str, ...]
     return support_margins(feet, stance, com)
 
 
-def _walk_window(recording: dict[str, np.ndarray], summary: dict[str, Any]
-                 ) -> tuple[float, np.ndarray]:
+def _walk_window(recording: dict[str, np.ndarray], summary: dict[str, Any],
+                 phase: str = "walk") -> tuple[float, np.ndarray]:
     """Start [s] of the walk phase and the recorded samples inside it (bool mask)."""
     times = recording["time [s]"]
-    walk = summary["phases"]["walk"]
+    walk = summary["phases"][phase]
     start = walk["start [s]"]
     return start, (times >= start) & (times <= start + walk["duration [s]"])
 
 
 def tip_over_series(recording: dict[str, np.ndarray], summary: dict[str, Any],
-                    robot: RobotModel, plan: WalkPlan) -> np.ndarray:
-    """:func:`gait_support_margins` for every recorded sample (NaN outside the walk)."""
+                    robot: RobotModel, plan: WalkPlan, phase: str = "walk") -> np.ndarray:
+    """:func:`gait_support_margins` for every recorded sample (NaN outside the walk
+    phase ``phase``)."""
     times = recording["time [s]"]
-    start, walking = _walk_window(recording, summary)
+    start, walking = _walk_window(recording, summary, phase)
     step = float(plan.times[1] - plan.times[0]) if plan.times.size > 1 else 1.0
     index = np.clip(np.round((times[walking] - start) / step).astype(int), 0,
                     len(plan.stance) - 1)
@@ -271,7 +293,7 @@ def tip_over_series(recording: dict[str, np.ndarray], summary: dict[str, Any],
 
 def walking_outcome(
     recording: dict[str, np.ndarray], summary: dict[str, Any], settings: WalkSettings,
-    robot: RobotModel, tip_over: np.ndarray | None = None,
+    robot: RobotModel, tip_over: np.ndarray | None = None, phase: str = "walk",
 ) -> dict[str, Any]:
     """Success or failure of a walking run, with the reason.
 
@@ -294,9 +316,9 @@ def walking_outcome(
     margin: a robot
     rocking on a diagonal pair of feet has a negative loaded-feet margin while its
     tip-over margin stays positive (the rocking is bounded by the unloaded feet, a few
-    millimetres above the ground).
+    millimetres above the ground). ``phase``: the name of the walk phase judged.
     """
-    _, walking = _walk_window(recording, summary)
+    _, walking = _walk_window(recording, summary, phase)
     direction = np.array([math.cos(settings.heading), math.sin(settings.heading)])
     x, y = recording["thorax x [m]"], recording["thorax y [m]"]
     first, last = np.flatnonzero(walking)[[0, -1]]
@@ -358,7 +380,7 @@ def walking_outcome(
         }
     else:
         tip_over_figures = {}
-    air = summary["phases"]["walk"]["air consumed [NL]"]
+    air = summary["phases"][phase]["air consumed [NL]"]
     outcome = {
         "distance travelled [m]": travelled,
         "sideways drift [m]": sideways,

@@ -1,0 +1,177 @@
+"""Moving the feet from one stance to another, a leg at a time, the body held over the rest.
+
+Between two walks the feet stand where the first one left them and must stand where the
+second one begins (another heading moves the footholds and the sway; another posture, the
+whole stance). Dragging them there in joint space would slide loaded feet. Instead
+(:func:`replacement_phases`) the body sways sideways until the centre of mass lies inside
+the triangle of the three feet that stay down, with a margin, for both legs of one side;
+each leg of that side in turn lifts its foot, carries it to its new foothold (in the
+thorax frame, on a lifted arc) and puts it down; the body sways to the other side for the
+other two legs; and the joints finally move into the second walk's first pose, the feet
+staying where they were put.
+
+Units: SI and radians; foot positions in the thorax frame of the legs' DH tables, sways
+along the body's lateral axis.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from pneumaquad.gait.stability import support_margins
+from pneumaquad.robot.experiment import Phase
+from pneumaquad.robot.legs import leg_dh_table, solve_leg, thorax_frame_points
+from pneumaquad.robot.simulation import RobotSimulation
+from pneumaquad.robot.stand_up import smooth_ramp
+
+from .reach import UnreachablePlanError
+from .walk import thorax_rotation
+
+__all__ = ["REPLACEMENT_MARGIN", "STEP_TIME", "SWAY_TIME", "replacement_phases"]
+
+Array = NDArray[np.float64]
+
+#: Static margin [m] of the centre of mass in the three feet that stay down while a foot
+#: moves (the gait plans 60 mm; a re-placement step is slower and shorter).
+REPLACEMENT_MARGIN = 0.04
+#: Duration [s] of a sway of the body, and of the final move into the next pose.
+SWAY_TIME = 2.0
+#: Duration [s] of one foot's move.
+STEP_TIME = 1.5
+#: Lift [m] of a moving foot at mid-step.
+STEP_LIFT = 0.04
+#: Largest sway [m] searched, in 5 mm steps.
+LARGEST_SWAY = 0.2
+
+
+def _feet(tables: list, pose: Array) -> Array:
+    """Feet (legs, 3) [m] in the thorax frame of a pose (joints,) [rad]."""
+    return np.array([thorax_frame_points(table, pose[3 * k: 3 * k + 3])
+                     for k, table in enumerate(tables)])
+
+
+def _pose(tables: list, feet: Array, near: Array) -> Array:
+    """Joint angles (joints,) [rad] putting the feet (legs, 3) [m] where asked (clamped IK
+    near ``near``); raises :class:`UnreachablePlanError` for a foot more than 10 mm off."""
+    pose = np.empty(3 * len(tables))
+    for k, table in enumerate(tables):
+        result = solve_leg(table, feet[k], near[3 * k: 3 * k + 3])
+        reached = thorax_frame_points(table, result.angles)
+        if np.linalg.norm(reached - feet[k]) > 0.01:
+            raise UnreachablePlanError(
+                f"leg {k} cannot reach {np.round(feet[k], 3)} m (thorax frame) while the "
+                f"feet are re-placed between two walks")
+        pose[3 * k: 3 * k + 3] = result.angles
+    return pose
+
+
+def _sway_for(feet_body: Array, moving: list[int], lateral: float, centre: Array) -> float:
+    """Smallest sway [m] along the body's y axis, with the sign ``lateral``, that keeps the
+    centre of mass ``centre`` (2,) [m, body frame] at least :data:`REPLACEMENT_MARGIN`
+    inside the feet left down while each leg of ``moving`` lifts in turn (``feet_body``
+    (steps, legs, 2): the feet before each step)."""
+    steps = len(moving)
+    for sway in np.arange(0.0, LARGEST_SWAY + 1e-9, 0.005):
+        stance = np.ones((steps, feet_body.shape[1]), dtype=bool)
+        for step, leg in enumerate(moving):
+            stance[step, leg] = False
+        shifted = feet_body - np.array([0.0, lateral * sway])
+        margins = support_margins(shifted, stance, np.tile(centre, (steps, 1)))
+        if np.all(margins >= REPLACEMENT_MARGIN):
+            return lateral * sway
+    raise UnreachablePlanError(
+        f"no sway up to {LARGEST_SWAY:g} m keeps the centre of mass {REPLACEMENT_MARGIN:g} m "
+        f"inside the feet left down while legs {moving} are re-placed")
+
+
+def _step(begin: float, leg: int, pose: Array, start: Array, end: Array, tables: list,
+          lift: Array):
+    """References of one leg's move from foot ``start`` to ``end`` (thorax frame) on an
+    arc lifted by ``lift`` (3,) at mid-step, the other joints held at ``pose``."""
+    samples = np.linspace(0.0, 1.0, 31)
+    smooth = samples * samples * (3.0 - 2.0 * samples)
+    angles = np.empty((len(samples), 3))
+    previous = pose[3 * leg: 3 * leg + 3]
+    for n, (fraction, along) in enumerate(zip(samples, smooth, strict=True)):
+        target = start + along * (end - start) + math.sin(math.pi * fraction) * lift
+        previous = solve_leg(tables[leg], target, previous).angles
+        angles[n] = previous
+
+    def references(times: np.ndarray) -> np.ndarray:
+        fraction = np.clip((np.asarray(times) - begin) / STEP_TIME, 0.0, 1.0)
+        rows = np.tile(pose, (len(fraction), 1))
+        for k in range(3):
+            rows[:, 3 * leg + k] = np.interp(fraction, samples, angles[:, k])
+        return rows
+
+    return references
+
+
+def replacement_phases(simulation: RobotSimulation, start_pose: Array, end_pose: Array,
+                       begin: float, centre: Array, name: str = "re-place") -> list[Phase]:
+    """Phases that move the stance of ``start_pose`` into that of ``end_pose`` (module
+    docstring), from simulation time ``begin`` [s].
+
+    Parameters
+    ----------
+    simulation : RobotSimulation
+    start_pose, end_pose : (joints,) [rad]
+        The pose the feet stand in now and the pose to end in (e.g. the last pose of one
+        walk and the first of the next).
+    begin : float [s]
+    centre : (2,) [m]
+        The centre of mass in the body frame (the gait's ``com_offset``).
+    name : str
+        Prefix of the phases' names.
+
+    Raises
+    ------
+    UnreachablePlanError
+        Where no sway keeps the centre of mass inside the three feet down, or a foot's
+        new place is out of its leg's reach.
+    """
+    robot = simulation.robot
+    tables = [leg_dh_table(robot, leg) for leg in robot.legs]
+    to_body = thorax_rotation(robot)
+    start_pose, end_pose = np.asarray(start_pose, float), np.asarray(end_pose, float)
+    feet, targets = _feet(tables, start_pose), _feet(tables, end_pose)
+    targets = (to_body @ targets.T).T  # in the body frame: z is up
+    targets[:, 2] = (to_body @ feet.T).T[:, 2].mean()  # on the ground the feet stand on
+    targets = (to_body.T @ targets.T).T
+    lift = to_body.T @ np.array([0.0, 0.0, STEP_LIFT])
+    closed = np.ones(robot.joint_count, dtype=bool)
+    lateral = (to_body @ feet.T).T[:, 1]
+    sides = [[leg for leg in range(len(tables)) if lateral[leg] > 0.0],
+             [leg for leg in range(len(tables)) if lateral[leg] <= 0.0]]
+    # rear legs first on each side, as in the lateral-sequence gait
+    sides = [sorted(side, key=lambda leg: (to_body @ feet[leg])[0]) for side in sides]
+    phases: list[Phase] = []
+    time, pose, current = begin, start_pose, feet.copy()
+    for side, direction in zip(sides, (-1.0, 1.0), strict=True):
+        before, trial = [], current.copy()  # the feet before each step of this side
+        for leg in side:
+            before.append((to_body @ trial.T).T[:, :2])
+            trial[leg] = targets[leg]
+        sway = _sway_for(np.array(before), side, direction, np.asarray(centre, float))
+        shift = to_body.T @ np.array([0.0, sway, 0.0])  # the body's move, thorax frame
+        swayed_feet = current - shift  # the feet seen from the swayed body
+        swayed = _pose(tables, swayed_feet, pose)
+        toward = "right" if direction < 0.0 else "left"
+        phases.append(Phase(f"{name}: sway {toward}", SWAY_TIME,
+                            smooth_ramp(pose, swayed, time, SWAY_TIME), closed))
+        time += SWAY_TIME
+        pose = swayed
+        for leg in side:
+            start, end = swayed_feet[leg].copy(), targets[leg] - shift
+            step = _step(time, leg, pose, start, end, tables, lift)
+            phases.append(Phase(f"{name}: {robot.legs[leg]}", STEP_TIME, step, closed))
+            time += STEP_TIME
+            pose = step(np.array([time]))[0]
+            swayed_feet[leg] = end
+            current[leg] = targets[leg]
+    phases.append(Phase(f"{name}: into the next pose", SWAY_TIME,
+                        smooth_ramp(pose, end_pose, time, SWAY_TIME), closed))
+    return phases
