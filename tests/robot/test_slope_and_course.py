@@ -160,3 +160,40 @@ def test_a_lasting_rotation_leaks_into_a_turn_of_the_stance_feet() -> None:
     after = stance_travel(gait, np.array([sim.time - start]))[0]
     assert np.allclose(hold.leg_turns, 0.5 * 0.1 * (after - before), atol=1e-9)
     assert np.isfinite(rows).all()
+
+
+def test_level_ground_moves_nothing_and_a_slope_does() -> None:
+    """placement_step on four feet in a plane: tilted 0.9° (below LEVEL_SLOPE) the body
+    stays where the plan puts it, rows unchanged; tilted 5° it moves uphill by h·tan θ
+    (blend 1, no limit)."""
+    from pneumaquad.gait.crawl import CrawlGait
+    from pneumaquad.locomotion.body_placement import LEVEL_SLOPE
+    from pneumaquad.locomotion.course_kernels import placement_step
+    from pneumaquad.locomotion.feedback_kernels import gait_timing
+    from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
+    from pneumaquad.robot.legs import leg_dh_table
+
+    robot = build_robot(load_robot("crr-quadruped"), "quadruped")
+    tables = stack_leg_tables([leg_dh_table(robot, leg) for leg in robot.legs])
+    feet_xy = np.array([[0.35, 0.4], [0.35, -0.4], [-0.4, 0.4], [-0.4, -0.4]])
+    gait = CrawlGait(np.column_stack([feet_xy, np.zeros(4)]), duty_factor=0.9, period=8.0,
+                     stride=0.1, step_height=0.04)
+    rows = np.tile(np.radians([0.0, -20.0, 80.0]), (10, 4))
+    centre = np.array([0.0, 0.0, 0.38])
+    identity = np.eye(3).ravel()
+    for degrees, moves in ((0.9, False), (5.0, True)):
+        slope = math.radians(degrees)
+        sites = np.column_stack([feet_xy, feet_xy[:, 0] * math.tan(slope)])
+        uphill, corrected = np.zeros(3), rows.copy()
+        assert placement_step(corrected, -1.0, gait_timing(gait), sites,
+                              np.arange(4, dtype=np.int64), centre, identity, uphill, 1.0,
+                              1.0, LEVEL_SLOPE, np.zeros((3, 9)), np.zeros((4, 3)), tables,
+                              chain_workspace()) == -1
+        if not moves:
+            assert np.all(uphill == 0.0) and np.array_equal(corrected, rows)
+            continue
+        normal = ground_plane(sites)
+        height = float((centre - sites.mean(axis=0)) @ normal)
+        assert uphill == pytest.approx(uphill_offset(normal, height), abs=1e-14)
+        assert np.linalg.norm(uphill) == pytest.approx(height * math.tan(slope), rel=1e-12)
+        assert not np.array_equal(corrected, rows)

@@ -325,7 +325,7 @@ def test_compiled_slope_placement_matches_its_numpy_formula(walking):
         assert placement_step(corrected, gait_time, timing, data.site_xpos,
                               np.asarray(robot.foot_site_id, dtype=np.int64),
                               data.subtree_com[robot.thorax_id], data.xmat[robot.thorax_id],
-                              state, 0.25, limit, np.zeros((3, 9)), np.zeros((4, 3)),
+                              state, 0.25, limit, 0.0, np.zeros((3, 9)), np.zeros((4, 3)),
                               stack_leg_tables(tables), chain_workspace()) == -1
         stance = (np.ones(4, dtype=bool) if gait_time < 0.0
                   else stance_flags(gait, np.array([gait_time]))[0])

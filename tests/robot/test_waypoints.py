@@ -48,9 +48,9 @@ def test_the_sway_keeps_the_centre_of_mass_inside_the_feet_left_down() -> None:
     feet = np.array([[0.4, 0.4], [0.4, -0.4], [-0.4, 0.4], [-0.4, -0.4]])
     before = np.array([feet, feet])  # the feet before each of the two steps
     sway = _sway_for(before, [2, 0], -1.0, np.zeros(2))
-    assert sway < 0.0  # to the right, away from the lifting feet
+    assert sway[0] == 0.0 and sway[1] < 0.0  # to the right, away from the lifting feet
     needed = REPLACEMENT_MARGIN * math.sqrt(2.0)
-    assert needed <= -sway < needed + 0.005  # the search's 5 mm grid
+    assert needed <= -sway[1] < needed + 0.005  # the search's 5 mm grid
     from pneumaquad.locomotion.reach import UnreachablePlanError
 
     narrow = feet * np.array([1.0, 0.05])  # feet nearly in a line: no sway is enough
@@ -59,9 +59,10 @@ def test_the_sway_keeps_the_centre_of_mass_inside_the_feet_left_down() -> None:
 
 
 def test_the_feet_are_re_placed_one_at_a_time_into_the_next_pose() -> None:
-    """Between a forward walk and a sideways one: sway, the two legs of one side, sway,
-    the other two, then into the next pose; one leg moves per step phase, and the last
-    phase ends in the next walk's first pose."""
+    """Between a forward walk and a sideways one: for each leg a sway over the other three
+    feet and its step (left legs first, rear before front), then into the next pose; one
+    leg moves per step phase, the feet stand still in a sway, and the last phase ends in
+    the next walk's first pose."""
     from pneumaquad.locomotion.replacement import replacement_phases
     from pneumaquad.locomotion.walk import plan_walk
     from pneumaquad.locomotion.walking import reachable_plan, walking_gait
@@ -79,9 +80,9 @@ def test_the_feet_are_re_placed_one_at_a_time_into_the_next_pose() -> None:
     start, end = plans[0][1].references[-1], plans[1][1].references[0]
     phases = replacement_phases(simulation, start, end, 10.0, plans[1][0].com_offset)
     names = [phase.name for phase in phases]
-    assert names == ["re-place: sway right", "re-place: rear_left", "re-place: front_left",
-                     "re-place: sway left", "re-place: rear_right", "re-place: front_right",
-                     "re-place: into the next pose"]
+    order = ["rear_left", "front_left", "rear_right", "front_right"]
+    assert names == [f"re-place: {part}" for leg in order
+                     for part in (f"sway for {leg}", leg)] + ["re-place: into the next pose"]
     time = 10.0
     for phase in phases:
         begin = phase.references(np.array([time]))[0]
@@ -90,6 +91,15 @@ def test_the_feet_are_re_placed_one_at_a_time_into_the_next_pose() -> None:
         if phase.name.endswith(("left", "right")) and "sway" not in phase.name:
             leg = robot.legs.index(phase.name.split(": ")[1])
             assert moved.tolist() == [leg]
+        if "sway" in phase.name:  # the body moves over feet that stay: every leg's joints
+            simulation.set_pose(begin)
+            feet_before = simulation.foot_positions() - simulation.data.xpos[
+                robot.thorax_id]
+            simulation.set_pose(after)
+            feet_after = simulation.foot_positions() - simulation.data.xpos[
+                robot.thorax_id]
+            moves = feet_after - feet_before  # the feet relative to the body: all alike
+            assert np.allclose(moves, moves[0], atol=0.011)
         time += phase.duration
     assert phases[-1].references(np.array([time]))[0] == pytest.approx(end, abs=1e-12)
     assert phases[0].references(np.array([10.0]))[0] == pytest.approx(start, abs=1e-12)

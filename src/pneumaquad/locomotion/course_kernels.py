@@ -110,7 +110,7 @@ def leak_into_turn(rows: Array, travel: Array, last_travel: Array, has_last: boo
 @compiled
 def placement_step(rows: Array, gait_time: float, timing: GaitTiming, site_positions: Array,
                    foot_sites: NDArray[np.int64], centre: Array, thorax_matrix: Array,
-                   uphill: Array, blend: float, limit: float, scratch: Array,
+                   uphill: Array, blend: float, limit: float, level: float, scratch: Array,
                    shifts: Array, tables: LegTables, workspace: ChainWorkspace) -> int:
     """One chunk of :class:`.body_placement.BodyPlacement`, in place (compiled).
 
@@ -118,7 +118,8 @@ def placement_step(rows: Array, gait_time: float, timing: GaitTiming, site_posit
     ``gait_time`` [s] (all of them before the gait starts; skipped with fewer than three
     or a singular fit), its unit normal n, the centre of mass's height h = (c − f̄)·n over
     it (``centre`` (3,) [m], f̄ the feet's mean), the offset h·(ẑ/(ẑ·n) − n) (limited to
-    ``limit`` [m]) blended into ``uphill`` (3,) [m, world] by ``blend``; every foot then
+    ``limit`` [m]; zero on a plane tilted less than ``level`` [rad], ground taken as
+    level) blended into ``uphill`` (3,) [m, world] by ``blend``; every foot then
     shifted by −``uphill`` (thorax frame through ``thorax_matrix`` (9,), thorax → world
     row major). ``scratch`` (3, 3 + 1 + 3 + 4): normal equations, right side, solution,
     elimination. Returns -1, or the leg whose Jacobian is singular.
@@ -153,6 +154,8 @@ def placement_step(rows: Array, gait_time: float, timing: GaitTiming, site_posit
         nx, ny, nz = -solution[1] / norm, -solution[2] / norm, 1.0 / norm
         height = ((centre[0] - mean_x / count) * nx + (centre[1] - mean_y / count) * ny
                   + (centre[2] - mean_z / count) * nz)
+        if nz > math.cos(level):  # level ground: the feet's heights differ by contact
+            height = 0.0
         target_x, target_y, target_z = -height * nx, -height * ny, height * (1.0 / nz - nz)
         length = math.sqrt(target_x ** 2 + target_y ** 2 + target_z ** 2)
         scale = limit / length if length > limit else 1.0

@@ -3,15 +3,15 @@
 Between two walks the feet stand where the first one left them and must stand where the
 second one begins (another heading moves the footholds and the sway; another posture, the
 whole stance). Dragging them there in joint space would slide loaded feet. Instead
-(:func:`replacement_phases`) the body sways sideways until the centre of mass lies inside
-the triangle of the three feet that stay down, with a margin, for both legs of one side;
-each leg of that side in turn lifts its foot, carries it to its new foothold (in the
-thorax frame, on a lifted arc) and puts it down; the body sways to the other side for the
-other two legs; and the joints finally move into the second walk's first pose, the feet
-staying where they were put.
+(:func:`replacement_phases`), for each foot in turn (the left ones first, rear before
+front, as in the lateral-sequence gait), the body sways away from it (sideways, or turned
+up to 60° towards the front or the rear where that is shorter and the legs reach) until
+the centre of mass lies inside the triangle of the three feet that stay down with a
+margin; the foot lifts, moves to its new foothold on an arc and goes down. The joints
+finally move into the second walk's first pose, the feet staying where they were put.
 
 Units: SI and radians; foot positions in the thorax frame of the legs' DH tables, sways
-along the body's lateral axis.
+in the body frame.
 """
 
 from __future__ import annotations
@@ -68,20 +68,32 @@ def _pose(tables: list, feet: Array, near: Array) -> Array:
     return pose
 
 
-def _sway_for(feet_body: Array, moving: list[int], lateral: float, centre: Array) -> float:
-    """Smallest sway [m] along the body's y axis, with the sign ``lateral``, that keeps the
-    centre of mass ``centre`` (2,) [m, body frame] at least :data:`REPLACEMENT_MARGIN`
-    inside the feet left down while each leg of ``moving`` lifts in turn (``feet_body``
-    (steps, legs, 2): the feet before each step)."""
+def _sways(feet_body: Array, moving: list[int], lateral: float, centre: Array):
+    """Sways (2,) [m, body frame x, y], shortest first, that keep the centre of mass
+    ``centre`` (2,) [m, body frame] at least :data:`REPLACEMENT_MARGIN` inside the feet
+    left down while each leg of ``moving`` lifts in turn (``feet_body`` (steps, legs, 2):
+    the feet before each step). Searched along the body's y axis, to the side ``lateral``
+    (±1), and along directions turned up to 60° from it towards the front and the rear
+    (5 mm steps); of equal lengths the one nearest the y axis first."""
     steps = len(moving)
+    stance = np.ones((steps, feet_body.shape[1]), dtype=bool)
+    for step, leg in enumerate(moving):
+        stance[step, leg] = False
+    directions = [np.array([math.sin(angle), lateral * math.cos(angle)])
+                  for angle in np.radians([0.0, 15.0, -15.0, 30.0, -30.0, 45.0, -45.0,
+                                           60.0, -60.0])]
     for sway in np.arange(0.0, LARGEST_SWAY + 1e-9, 0.005):
-        stance = np.ones((steps, feet_body.shape[1]), dtype=bool)
-        for step, leg in enumerate(moving):
-            stance[step, leg] = False
-        shifted = feet_body - np.array([0.0, lateral * sway])
-        margins = support_margins(shifted, stance, np.tile(centre, (steps, 1)))
-        if np.all(margins >= REPLACEMENT_MARGIN):
-            return lateral * sway
+        for direction in directions:
+            shifted = feet_body - sway * direction
+            margins = support_margins(shifted, stance, np.tile(centre, (steps, 1)))
+            if np.all(margins >= REPLACEMENT_MARGIN):
+                yield sway * direction
+
+
+def _sway_for(feet_body: Array, moving: list[int], lateral: float, centre: Array) -> Array:
+    """The shortest of :func:`_sways`; raises :class:`UnreachablePlanError` if none."""
+    for sway in _sways(feet_body, moving, lateral, centre):
+        return sway
     raise UnreachablePlanError(
         f"no sway up to {LARGEST_SWAY:g} m keeps the centre of mass {REPLACEMENT_MARGIN:g} m "
         f"inside the feet left down while legs {moving} are re-placed")
@@ -110,8 +122,30 @@ def _step(begin: float, leg: int, pose: Array, start: Array, end: Array, tables:
     return references
 
 
+def _reachable_sway(tables: list, to_body: Array, before: Array, side: list[int],
+                    lateral: float, centre: Array, current: Array,
+                    pose: Array) -> tuple[Array, Array]:
+    """The shortest sway of :func:`_sways` at which every leg reaches its foot before its
+    side's steps; returns the body's move (3,) [m, thorax frame] and the swayed pose
+    (joints,) [rad]."""
+    found = False
+    for sway in _sways(before, side, lateral, centre):
+        found = True
+        shift = to_body.T @ np.array([sway[0], sway[1], 0.0])
+        try:
+            return shift, _pose(tables, current - shift, pose)
+        except UnreachablePlanError:
+            continue
+    reason = "the legs cannot reach their feet at any sway that does" if found else ""
+    raise UnreachablePlanError(
+        f"no sway up to {LARGEST_SWAY:g} m keeps the centre of mass {REPLACEMENT_MARGIN:g} m "
+        f"inside the feet left down while legs {side} are re-placed"
+        + (f" ({reason})" if reason else ""))
+
+
 def replacement_phases(simulation: RobotSimulation, start_pose: Array, end_pose: Array,
-                       begin: float, centre: Array, name: str = "re-place") -> list[Phase]:
+                       begin: float, centre: Array, name: str = "re-place",
+                       body_move: Array | None = None) -> list[Phase]:
     """Phases that move the stance of ``start_pose`` into that of ``end_pose`` (module
     docstring), from simulation time ``begin`` [s].
 
@@ -126,6 +160,9 @@ def replacement_phases(simulation: RobotSimulation, start_pose: Array, end_pose:
         The centre of mass in the body frame (the gait's ``com_offset``).
     name : str
         Prefix of the phases' names.
+    body_move : (2,) [m], optional
+        Where the body is to end, body frame x, y, from where it stands now: the new
+        footholds are placed about it (default: where it stands).
 
     Raises
     ------
@@ -140,6 +177,8 @@ def replacement_phases(simulation: RobotSimulation, start_pose: Array, end_pose:
     feet, targets = _feet(tables, start_pose), _feet(tables, end_pose)
     targets = (to_body @ targets.T).T  # in the body frame: z is up
     targets[:, 2] = (to_body @ feet.T).T[:, 2].mean()  # on the ground the feet stand on
+    if body_move is not None:  # footholds about where the body is to end
+        targets[:, :2] += np.asarray(body_move, dtype=float)
     targets = (to_body.T @ targets.T).T
     lift = to_body.T @ np.array([0.0, 0.0, STEP_LIFT])
     closed = np.ones(robot.joint_count, dtype=bool)
@@ -151,26 +190,18 @@ def replacement_phases(simulation: RobotSimulation, start_pose: Array, end_pose:
     phases: list[Phase] = []
     time, pose, current = begin, start_pose, feet.copy()
     for side, direction in zip(sides, (-1.0, 1.0), strict=True):
-        before, trial = [], current.copy()  # the feet before each step of this side
-        for leg in side:
-            before.append((to_body @ trial.T).T[:, :2])
-            trial[leg] = targets[leg]
-        sway = _sway_for(np.array(before), side, direction, np.asarray(centre, float))
-        shift = to_body.T @ np.array([0.0, sway, 0.0])  # the body's move, thorax frame
-        swayed_feet = current - shift  # the feet seen from the swayed body
-        swayed = _pose(tables, swayed_feet, pose)
-        toward = "right" if direction < 0.0 else "left"
-        phases.append(Phase(f"{name}: sway {toward}", SWAY_TIME,
-                            smooth_ramp(pose, swayed, time, SWAY_TIME), closed))
-        time += SWAY_TIME
-        pose = swayed
-        for leg in side:
-            start, end = swayed_feet[leg].copy(), targets[leg] - shift
-            step = _step(time, leg, pose, start, end, tables, lift)
+        for leg in side:  # a sway over the three feet down, then the step
+            shift, swayed = _reachable_sway(
+                tables, to_body, (to_body @ current.T).T[None, :, :2], [leg], direction,
+                np.asarray(centre, float), current, pose)
+            phases.append(Phase(f"{name}: sway for {robot.legs[leg]}", SWAY_TIME,
+                                smooth_ramp(pose, swayed, time, SWAY_TIME), closed))
+            time += SWAY_TIME
+            start, end = current[leg] - shift, targets[leg] - shift
+            step = _step(time, leg, swayed, start, end, tables, lift)
             phases.append(Phase(f"{name}: {robot.legs[leg]}", STEP_TIME, step, closed))
             time += STEP_TIME
             pose = step(np.array([time]))[0]
-            swayed_feet[leg] = end
             current[leg] = targets[leg]
     phases.append(Phase(f"{name}: into the next pose", SWAY_TIME,
                         smooth_ramp(pose, end_pose, time, SWAY_TIME), closed))

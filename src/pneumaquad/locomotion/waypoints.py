@@ -162,9 +162,12 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
     time += phases[-1].duration
     for before, after in itertools.pairwise(path):
         try:
-            moves = replacement_phases(simulation, before.plan.references[-1],
-                                       after.plan.references[0], time,
-                                       after.gait.com_offset, f"re-place {after.phase}")
+            # the body ends where the next walk's plan starts: its sway differs
+            moves = replacement_phases(
+                simulation, before.plan.references[-1], after.plan.references[0], time,
+                after.gait.com_offset, f"re-place {after.phase}",
+                body_move=_sway(after.gait, 0.0) - _sway(before.gait,
+                                                         before.settings.duration()))
         except UnreachablePlanError as error:
             raise WalkSettingsError(f"the feet cannot be re-placed for {after.phase}: "
                                     f"{error}", ("waypoints",)) from None
