@@ -137,6 +137,14 @@ def walk_once(name: str, speed: float, output: Path) -> dict[str, Any]:
     started = time.perf_counter()
     run = run_phases(simulation, phases, folder, f"walk {name} {speed:g} m/s")
     wall = time.perf_counter() - started
+    if "walk" not in run.summary["phases"]:  # the stance before it was not verified
+        stopped = run.summary.get("stopped before") or {"reason": "interrupted"}
+        figures = dict.fromkeys(FIGURE_KEYS, math.nan) | {
+            "setting": name, "speed [m/s]": speed, "success": False,
+            "reasons": [f"not begun: {stopped['reason']}"],
+            "simulated [s]": float(run.summary["simulated time [s]"]), "wall [s]": wall}
+        (folder / "figures.json").write_text(json.dumps(figures, indent=2), encoding="utf-8")
+        return figures
     tip_over = tip_over_series(run.recording, run.summary, robot, plan)
     outcome = walking_outcome(run.recording, run.summary, settings, robot, tip_over)
     times = run.recording["time [s]"]
@@ -170,6 +178,14 @@ def walk_once(name: str, speed: float, output: Path) -> dict[str, Any]:
     return figures
 
 
+#: The figures of a walk (NaN for a walk that did not begin).
+FIGURE_KEYS = ("planned travel [m]", "loaded-feet margin < 0 [%]", "tip-over margin < 0 [%]",
+               "largest slide [m]", "travelled [m]", "travelled / 0.5 m",
+               "travelled / planned", "drift [m]", "yaw min [deg]", "yaw max [deg]",
+               "air [NL/m]", "tripod smallest load, median [N]",
+               "tripod smallest load, 5th percentile [N]")
+
+
 def _line(f: dict[str, Any]) -> str:
     return (f"{f['setting']:<20} {f['speed [m/s]'] * 1000:4.0f} mm/s  "
             f"{'success' if f['success'] else ','.join(f['reasons']):<22} "
@@ -193,11 +209,11 @@ def summarise(results: list[dict[str, Any]]) -> None:
         rows = [r for r in results if r["setting"] == name]
 
         def mean(key: str, rows=rows) -> float:
-            return float(np.mean([r[key] for r in rows]))
+            return float(np.nanmean([r[key] for r in rows]))
 
         successes = sum(r["success"] for r in rows)
-        low = min(r["yaw min [deg]"] for r in rows)
-        high = max(r["yaw max [deg]"] for r in rows)
+        low = float(np.nanmin([r["yaw min [deg]"] for r in rows]))
+        high = float(np.nanmax([r["yaw max [deg]"] for r in rows]))
         speed = sum(r["simulated [s]"] for r in rows) / sum(r["wall [s]"] for r in rows)
         print(f"{name:<20} {mean('loaded-feet margin < 0 [%]'):5.1f} %  "
               f"{mean('largest slide [m]') * 100:4.1f} cm  {mean('travelled / 0.5 m'):5.2f}"
