@@ -46,7 +46,8 @@ def test_robot_export_writes_under_runs_unless_given_a_file(
 
 
 class _InterruptedWorker:
-    """A video worker whose wait is cut by Ctrl-C (as a real SIGINT raises it there)."""
+    """A video worker whose wait is cut by Ctrl-C (as a real worker's wait raises a second
+    one, the first having stopped it)."""
 
     cancelled = False
 
@@ -72,7 +73,7 @@ def test_ctrl_c_while_rendering_a_video_ends_with_130_and_says_so(
     monkeypatch.setattr(cli_robot, "VideoWorker", _InterruptedWorker)
     result = runner.invoke(app, ["video", str(tmp_path)])
     assert result.exit_code == 130
-    assert "no video: interrupted (Ctrl-C)" in " ".join(result.output.split())
+    assert "no video: interrupted again (Ctrl-C)" in " ".join(result.output.split())
     assert "Traceback" not in result.output
     assert _InterruptedWorker.cancelled
 

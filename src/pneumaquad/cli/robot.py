@@ -6,6 +6,14 @@ separate process (:mod:`pneumaquad.robot.video_worker`) started with the command
 the recorded samples while the run goes (the runs' ``on_sample`` hook); it works on beside
 the plots and the command waits for it at the end. Without a video the worker writes only
 ``first-frame.png``, from ``trajectory.npz`` once the run has ended.
+
+Ctrl-C: the first stops the run (at the next chunk) and the worker alike; the command writes
+the summary (``interrupted: true``), the plots and a video of the frames rendered so far (a
+line says how many of how many), then exits with 130. A Ctrl-C while waiting for the video
+of a finished run stops the worker the same way. Further Ctrl-Cs while the plots are drawn
+and the video closed are counted rather than raised; one that comes while a stopped worker
+is still closing its files discards the video. A run that diverges keeps the video of the
+frames rendered up to then too.
 """
 
 from __future__ import annotations
@@ -13,7 +21,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -37,17 +45,24 @@ from pneumaquad.cli.common import (
     stderr_console,
 )
 from pneumaquad.cli.settings import option_names, settings_options
+from pneumaquad.io.interruption import InterruptCount, counted_interrupts
 from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.locomotion.walk_settings import WALK_SETTINGS, WalkSettings
 from pneumaquad.params import JOINT_NAMES, load_robot
 from pneumaquad.params.schema import Bounds
+from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.video import (
     DEFAULT_VIDEO_QUALITY,
     VIDEO_QUALITIES,
     RenderingUnavailableError,
     VideoError,
 )
-from pneumaquad.robot.video_worker import VideoSettings, VideoWorker, VideoWorkerError
+from pneumaquad.robot.video_worker import (
+    RenderedVideo,
+    VideoSettings,
+    VideoWorker,
+    VideoWorkerError,
+)
 
 leg_app = command_group(
     help="The front-right leg on a fixed thorax (thesis 5.5.2 validation set-up).",
@@ -156,7 +171,7 @@ def _run(simulation, phases, folder_option: Path | None, kind: str, description:
     from pneumaquad.robot.experiment import run_phases
 
     folder = create_run_folder(folder_option, kind)
-    with progress_bar(kind) as update:
+    with _video_of_a_diverged_run(worker, video), progress_bar(kind) as update:
         run = run_phases(simulation, phases, folder, description, _progress(update),
                          clock=clock, **_sample_hook(worker, video, simulation))
     _report(simulation, run, description, worker, video, clock, profile, joints)
@@ -168,18 +183,24 @@ def _report(simulation, run, description: str, worker: VideoWorker | None, video
     """Plots, video and key figures of a finished robot run; exit 130 if interrupted.
 
     ``worker`` (:func:`_start_video`) renders the video, or only first-frame.png without
-    ``video``. It is told that the run has ended first, works while the plots are drawn,
-    and is waited for at the end (a progress bar; a yellow warning if it fails; Ctrl-C
-    cancels it and exits with 130, the run folder complete). The command's real-time
-    factor follows, and with ``profile`` where its wall time went (``profile.json``).
+    ``video``. It is told that the run has ended first (and stopped if the run was
+    interrupted), works while the plots are drawn, and is waited for at the end
+    (:func:`_wait_for_video`). Ctrl-C until then is counted, not raised
+    (:func:`~pneumaquad.io.interruption.counted_interrupts`), and acted on while waiting:
+    the plots and key figures are written whole, and the command exits with 130. The
+    command's real-time factor follows, and with ``profile`` where its wall time went
+    (``profile.json``).
     """
     folder = run.folder
-    if worker is not None:
-        worker.finish(folder, first_frame_only=not video)
-    with clock.stage("plots"):
-        _report_figures(simulation, run, description, joints)
-    with clock.stage("video (waiting for the worker)" if video else "first frame (waiting)"):
-        waited = _wait_for_video(worker, folder, first_frame_only=not video)
+    with counted_interrupts() as ctrl_c:
+        if worker is not None:
+            worker.finish(folder, first_frame_only=not video, interrupted=run.interrupted)
+        with clock.stage("plots"):
+            _report_figures(simulation, run, description, joints)
+        with clock.stage("video (waiting for the worker)" if video else
+                         "first frame (waiting)"):
+            waited = _wait_for_video(worker, folder, first_frame_only=not video,
+                                     ctrl_c=ctrl_c)
     if profile:
         from pneumaquad.robot.profiling import split_simulation_time
 
@@ -188,7 +209,7 @@ def _report(simulation, run, description: str, worker: VideoWorker | None, video
             split_simulation_time(simulation, clock, steps)
     report_command_time(folder, run.summary, clock, profile)
     exit_if_interrupted(run.summary)  # the figures above are printed once
-    if not waited:
+    if not waited or ctrl_c.presses:
         raise typer.Exit(130)
 
 
@@ -251,31 +272,68 @@ def _check_environment(environment: str) -> None:
                                  param_hint="--environment")
 
 
-def _wait_for_video(worker: VideoWorker | None, folder: Path,
-                    first_frame_only: bool = False) -> bool:
+def _wait_for_video(worker: VideoWorker | None, folder: Path, first_frame_only: bool = False,
+                    ctrl_c: InterruptCount | None = None) -> bool:
     """Wait for the worker with a progress bar and print its video; False after Ctrl-C.
 
-    A worker that fails leaves a yellow warning (the run folder is complete without it).
+    A Ctrl-C while waiting (with ``ctrl_c``: each one counted since, raised here) stops the
+    worker, which keeps the frames rendered so far (:meth:`VideoWorker.wait`); one after the
+    worker was stopped (also by an interrupted run) discards the video. A worker that fails
+    leaves a yellow warning (the run folder is complete without it).
     """
     what = "first-frame.png" if first_frame_only else "video"
     if worker is None:
         return True
+
+    def checked(update: Callable[[int, int], None] | None) -> Callable[[int, int], None]:
+        def progress(done: int, total: int) -> None:
+            if ctrl_c is not None:
+                ctrl_c.check()
+            if update is not None:
+                update(done, total)
+        return progress
+
     try:
         if first_frame_only:
-            worker.wait()
-            return True
+            worker.wait(checked(None))
+            return not worker.interrupted
         with progress_bar("video frames") as update:
-            rendered = worker.wait(update)
+            rendered = worker.wait(checked(update))
     except KeyboardInterrupt:
         hint = "" if first_frame_only else f"; `pneumaquad video {folder}` renders it"
-        stderr_console.print(f"[yellow]no {what}: interrupted{hint}[/yellow]")
+        stderr_console.print(f"[yellow]no {what}: interrupted again{hint}[/yellow]")
         return False
     except (RenderingUnavailableError, VideoError, VideoWorkerError) as error:
         stderr_console.print(f"[yellow]no {what}: {error}[/yellow]")
-        return True
-    console.print(f"video: {rendered.mp4} ({rendered.frames} frames at "
-                  f"{worker.settings.fps:g} frames/s, {worker.settings.quality} quality)")
-    return True
+        return not worker.interrupted
+    _print_video(rendered, worker.settings, folder)
+    return not worker.interrupted
+
+
+def _print_video(rendered: RenderedVideo, settings: VideoSettings, folder: Path) -> None:
+    """The line of a rendered video: its file and frames, and for a video stopped early
+    (Ctrl-C, an interrupted or diverged run) how many of the frames due it holds."""
+    if rendered.complete:
+        console.print(f"video: {rendered.mp4} ({rendered.frames} frames at {settings.fps:g} "
+                      f"frames/s, {settings.quality} quality)")
+        return
+    stderr_console.print(
+        f"[yellow]video: {rendered.mp4} holds {rendered.frames} of {rendered.due} frames "
+        f"(stopped early, at {settings.fps:g} frames/s); `pneumaquad video {folder}` renders "
+        "them all[/yellow]")
+
+
+@contextlib.contextmanager
+def _video_of_a_diverged_run(worker: VideoWorker | None, video: bool) -> Iterator[None]:
+    """Around a run: if it diverges (its run folder written), the worker stops and its
+    frames so far become the run's video before the error goes on."""
+    try:
+        yield
+    except SimulationDivergedError as error:
+        if video and worker is not None and error.folder is not None:
+            worker.finish(error.folder, interrupted=True)
+            _wait_for_video(worker, error.folder)
+        raise
 
 
 @leg_app.command("validate")
@@ -489,7 +547,7 @@ def robot_walk(
                                  seed)
         kind = f"walk-{environment}"
         try:
-            with progress_bar(kind) as update:
+            with _video_of_a_diverged_run(worker, video), progress_bar(kind) as update:
                 hooks = _sample_hook(worker, video, simulation)
                 walk = (run_walk(simulation, settings, output, progress=_progress(update),
                                  clock=clock, **hooks) if points is None else
@@ -666,10 +724,10 @@ def video_command(
         worker.finish(run)
         try:
             with progress_bar("video frames") as update:
-                rendered = worker.wait(update)
-        except KeyboardInterrupt:  # the worker is stopped and removes what it was writing
-            stderr_console.print("[yellow]no video: interrupted (Ctrl-C); the run folder is "
-                                 "unchanged[/yellow]", highlight=False)
+                rendered = worker.wait(update)  # Ctrl-C: the frames so far (VideoWorker.wait)
+        except KeyboardInterrupt:  # a second Ctrl-C: the worker removes what it was writing
+            stderr_console.print("[yellow]no video: interrupted again (Ctrl-C); the run "
+                                 "folder is unchanged[/yellow]", highlight=False)
             raise typer.Exit(130) from None
         except RenderingUnavailableError as error:
             stderr_console.print(f"[yellow]no video: {error}[/yellow]")
@@ -677,4 +735,10 @@ def video_command(
         except VideoWorkerError as error:
             stderr_console.print(f"[red]no video: {error}[/red]")
             raise typer.Exit(1) from None
-    console.print(f"video: {rendered.mp4} ({rendered.frames} frames)")
+    if rendered.complete:
+        console.print(f"video: {rendered.mp4} ({rendered.frames} frames)")
+    else:
+        stderr_console.print(f"[yellow]video: {rendered.mp4} holds {rendered.frames} of "
+                             f"{rendered.due} frames (interrupted)[/yellow]", highlight=False)
+    if worker.interrupted:
+        raise typer.Exit(130)

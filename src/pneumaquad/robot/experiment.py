@@ -268,6 +268,7 @@ def run_phases(
             summary["diverged at [s]"] = failure.time
         writer.write_summary(summary)
     if failure is not None:
+        failure.folder = folder
         raise failure
     return RobotRun(recording, summary, interrupted, wall, folder)
 

@@ -35,7 +35,7 @@ import importlib
 import os
 import subprocess
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -451,6 +451,7 @@ def render_run_video(
     max_seconds: float | None = None,
     quality: str = DEFAULT_VIDEO_QUALITY,
     progress: FrameProgress | None = None,
+    stop: Callable[[], bool] = lambda: False,
 ) -> VideoFiles:
     """Render ``video.mp4``, ``video.gif`` and ``first-frame.png`` of a run folder.
 
@@ -471,6 +472,9 @@ def render_run_video(
         One of :data:`VIDEO_QUALITIES` (module docstring).
     progress
         Called after each frame with (frames written, frames in the video).
+    stop
+        Asked after each frame; once true, the files are closed with the frames written so
+        far (at least the first), as by :func:`write_video_files`.
 
     Returns
     -------
@@ -496,4 +500,4 @@ def render_run_video(
     preview = GifPreview(fps, duration) if gif else None
     total = video_frame_count(duration, fps)
     return write_video_files(frames, folder, fps, preview, progress=progress,
-                             frame_total=lambda: total)
+                             frame_total=lambda: total, stop=stop)

@@ -260,29 +260,44 @@ def write_video_files(
     progress: FrameProgress | None = None,
     frame_total: Callable[[], int] = lambda: 0,
     duration: Callable[[], float | None] = lambda: None,
+    stop: Callable[[], bool] = lambda: False,
 ) -> VideoFiles:
     """Write ``video.mp4``, ``first-frame.png`` and (with a ``preview``) ``video.gif`` into
     ``folder`` from one pass over ``frames``.
 
     ``progress`` is called after each frame with the frames written and ``frame_total()``
     (0 while unknown); ``duration()`` [s] is read once the frames are exhausted, for a preview
-    made without it.
+    made without it. ``stop()`` is asked after each frame: once it is true no further frame
+    is taken (``frames`` is closed) and the files hold the frames written so far, at least
+    the first (the preview then lasts as long as they do).
     """
     folder = Path(folder)
     gif_path = folder / GIF_NAME if preview is not None else None
     files = VideoFiles(folder / MP4_NAME, gif_path, folder / FIRST_FRAME_NAME)
+    written, cut = 0, False
 
     def tap(frames: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
+        nonlocal written, cut
         for index, frame in enumerate(frames):
             if index == 0:
                 write_first_frame_png(frame, files.first_frame)
             if preview is not None:
                 preview.add(index, frame)
             yield frame
+            written = index + 1
             if progress is not None:
-                progress(index + 1, frame_total())
+                progress(written, frame_total())
+            if stop():
+                cut = True
+                return
 
-    write_video(tap(frames), files.mp4, fps)
+    frames = iter(frames)
+    try:
+        write_video(tap(frames), files.mp4, fps)
+    finally:
+        close = getattr(frames, "close", None)
+        if close is not None:
+            close()  # a generator stopped early releases its renderer now
     if preview is not None and files.gif is not None:
-        preview.save(files.gif, duration())
+        preview.save(files.gif, (written - 1) / fps if cut else duration())
     return files

@@ -12,17 +12,27 @@ worker renders the frames still due and moves ``video.mp4``, ``video.gif`` and
 instead (:func:`~pneumaquad.robot.video.render_run_video`), or only ``first-frame.png``.
 :meth:`VideoWorker.wait` follows its progress and returns the files.
 
-The worker ignores Ctrl-C (the command decides: an interrupted run's video is finished, Ctrl-C
-while waiting cancels it) and runs at a lower priority (nice 10), so the run keeps its core.
+Stopping: a run cut short (Ctrl-C, an error) is finished with ``interrupted=True``, and a
+Ctrl-C while waiting stops the worker the same way (:meth:`VideoWorker.stop`): it renders no
+further frame, closes the files with the frames rendered so far (at least the first; a valid
+MP4 and GIF) and moves them into the folder; :class:`RenderedVideo` says how many of the
+frames due they hold. A second Ctrl-C while waiting cancels the worker, which then removes
+what it was writing. The files are written in a folder of the worker's own and only moved
+into the run folder once closed, so the run folder never holds a partial file.
+
+The worker ignores the terminal's Ctrl-C (the command decides) and runs at a lower priority
+(nice 10), so the run keeps its core.
 
 Protocol: the parent writes messages to the worker's standard input, each a JSON line then as
 many bytes as its ``"bytes"`` says: ``model`` (MJCF text, UTF-8), ``samples`` (``count`` rows
 of ``width`` little-endian float64: the time [s], then qpos) and ``finish`` (``folder``,
-``first_frame_only``). The writes never block the run: what the pipe does not take is kept and
-sent later. The end of the input before ``finish`` cancels the video. The worker answers on its
-standard output with JSON lines: ``{"progress": [done, total]}`` (total 0 while unknown), then
-``{"files": {...}, "frames": n}`` or ``{"error": class name, "message": text}``; anything else
-it prints goes to its standard error, which the parent keeps in a temporary file.
+``first_frame_only``), then possibly ``stop`` (acted on as soon as it is read, ahead of the
+samples still queued). The writes never block the run: what the pipe does not take is kept
+and sent later. The end of the input before ``finish`` cancels the video. The worker answers
+on its standard output with JSON lines: ``{"progress": [done, total]}`` (total 0 while
+unknown), then ``{"files": {...}, "frames": n, "due": m}`` or ``{"error": class name,
+"message": text}``; anything else it prints goes to its standard error, which the parent
+keeps in a temporary file.
 """
 
 from __future__ import annotations
@@ -33,6 +43,7 @@ import importlib
 import json
 import os
 import queue
+import select
 import shutil
 import signal
 import subprocess
@@ -56,6 +67,7 @@ from .video import (
     MissingRunFileError,
     RenderingUnavailableError,
     VideoError,
+    VideoFiles,
     load_model,
     render_first_frame,
     render_run_video,
@@ -103,12 +115,19 @@ class VideoSettings:
 @dataclass(frozen=True)
 class RenderedVideo:
     """Files the worker wrote (``mp4`` and ``gif`` are ``None`` when it was not asked for
-    them) and the number of video frames."""
+    them), the number of video frames they hold and the number the whole run calls for
+    (more when the worker was stopped)."""
 
     mp4: Path | None
     gif: Path | None
     first_frame: Path
     frames: int
+    due: int
+
+    @property
+    def complete(self) -> bool:
+        """Whether the video holds every frame of the run."""
+        return self.frames >= self.due
 
 
 def worker_command(settings: VideoSettings) -> list[str]:
@@ -123,7 +142,8 @@ class VideoWorker:
     """The parent's handle on a video worker process (module docstring).
 
     The process starts at construction. A worker left without :meth:`wait` is cancelled at
-    the end of a ``with`` block.
+    the end of a ``with`` block. ``interrupted`` becomes true when a Ctrl-C reaches
+    :meth:`wait`.
 
     Raises
     ------
@@ -138,7 +158,8 @@ class VideoWorker:
         self._first_time = self._latest_time = 0.0  # of the samples [s]
         self._batch: list[np.ndarray] = []
         self._unsent = bytearray()
-        self._finished = False
+        self._finished = self._stopped = False
+        self.interrupted = False
         self._progress = (0, 0)
         self._answer: dict[str, Any] | None = None
         self._errors = tempfile.TemporaryFile()  # noqa: SIM115 - closed by wait() or cancel()
@@ -182,21 +203,38 @@ class VideoWorker:
         if len(self._batch) >= SAMPLES_PER_MESSAGE:
             self._send_batch()
 
-    def finish(self, run_folder: Path, *, first_frame_only: bool = False) -> None:
+    def finish(self, run_folder: Path, *, first_frame_only: bool = False,
+               interrupted: bool = False) -> None:
         """The run has ended and its folder is complete: write the files into ``run_folder``.
 
         Without samples the worker renders ``trajectory.npz`` and ``model.xml`` of the folder
-        (``first_frame_only``: only ``first-frame.png``).
+        (``first_frame_only``: only ``first-frame.png``). ``interrupted``: the run was cut
+        short, so the worker is stopped at once (:meth:`stop`).
         """
         self._send_batch()
         self._finished = True
         self._send({"kind": "finish", "folder": str(Path(run_folder).resolve()),
                     "first_frame_only": first_frame_only})
+        if interrupted:
+            self.stop()
+
+    def stop(self) -> None:
+        """After :meth:`finish`: render no further frame, but close the files with the frames
+        rendered so far (at least the first) and move them into the run folder."""
+        if not self._finished:
+            raise RuntimeError("stop() before finish(): the worker has no folder to write to")
+        if not self._stopped:
+            self._stopped = True
+            self._send({"kind": "stop"})
 
     def wait(self, progress: FrameProgress | None = None, poll: float = 0.1) -> RenderedVideo:
         """Wait for the worker, calling ``progress(done, total)`` every ``poll`` [s].
 
-        Ctrl-C (or any exception) while waiting cancels the worker and is raised again.
+        The first Ctrl-C while waiting stops the worker (:meth:`stop`; ``interrupted``
+        becomes true) and waits on for the files of the frames rendered so far. A Ctrl-C
+        after the worker was stopped cancels it (it removes what it was writing) and is
+        raised again, unless the worker had already moved its files into the folder: they
+        are then returned. Any other exception cancels the worker and is raised again.
 
         Raises
         ------
@@ -206,12 +244,12 @@ class VideoWorker:
             If the worker ended without an answer (its last line of standard error).
         """
         try:
-            while self._reader.is_alive():
-                self._flush()
-                if progress is not None:
-                    progress(*self._frames_done())
-                self._reader.join(poll)
-            self._process.wait()
+            self._follow(progress, poll)
+        except KeyboardInterrupt:
+            self.cancel()
+            if "files" not in (self._answer or {}):
+                raise
+            self.interrupted = True  # too late to cancel: the files are in the folder
         except BaseException:
             self.cancel()
             raise
@@ -222,13 +260,31 @@ class VideoWorker:
         if "files" in answer:
             files = {key: Path(value) if value else None for key, value in answer["files"].items()}
             return RenderedVideo(files["mp4"], files["gif"], files["first_frame"],
-                                 answer["frames"])
+                                 answer["frames"], answer["due"])
         if answer.get("error") in _ERRORS:
             raise _ERRORS[answer["error"]](answer["message"])
         if "error" in answer:
             raise VideoWorkerError(f"{answer['error']}: {answer['message']}")
         raise VideoWorkerError(f"the video worker ended with exit status "
                                f"{self._process.returncode}{error_line}")
+
+    def _follow(self, progress: FrameProgress | None, poll: float) -> None:
+        """Feed and follow the worker until it ends; the first Ctrl-C stops it (:meth:`wait`).
+
+        What the run left unsent goes as fast as the worker reads it, so that a ``stop``
+        behind it arrives at once."""
+        while self._reader.is_alive():
+            try:
+                self._flush(poll)
+                if progress is not None:
+                    progress(*self._frames_done())
+                self._reader.join(0.0 if self._unsent else poll)
+            except KeyboardInterrupt:
+                if self._stopped or not self._finished:
+                    raise
+                self.interrupted = True
+                self.stop()
+        self._process.wait()
 
     def cancel(self) -> None:
         """Stop the worker if it still runs; it removes the video it was writing."""
@@ -246,9 +302,10 @@ class VideoWorker:
 
     def _frames_done(self) -> tuple[int, int]:
         """(frames rendered, frames of the video): the worker knows the total only at its
-        end of a streamed run, but it follows from the times of the samples sent."""
+        end of a streamed run, but it follows from the times of the samples sent (not once
+        stopped: the video then holds fewer)."""
         done, total = self._progress
-        if not total and self._finished and self.samples:
+        if not total and self._finished and self.samples and not self._stopped:
             total = video_frame_count(self._latest_time - self._first_time, self.settings.fps)
         return done, total
 
@@ -266,21 +323,25 @@ class VideoWorker:
         self._unsent += line + payload
         self._flush()
 
-    def _flush(self) -> None:
-        """Write what the pipe takes now; the rest waits for the next call."""
+    def _flush(self, timeout: float = 0.0) -> None:
+        """Write what the pipe takes within ``timeout`` [s] (0: now, never blocking the run);
+        the rest waits for the next call."""
         stdin = self._process.stdin
+        deadline = time.monotonic() + timeout
         while self._unsent and not stdin.closed:
             try:
                 written = os.write(stdin.fileno(), self._unsent)
             except BlockingIOError:
-                return
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return
+                select.select([], [stdin.fileno()], [], left)  # until the worker reads
+                continue
             except OSError:  # the worker has ended; wait() says why
                 self._unsent.clear()
                 self._close_input()
                 return
             del self._unsent[:written]
-        if self._finished and not self._unsent:
-            self._close_input()  # all said: the worker's reader ends at the end of its input
 
     def _close_input(self) -> None:
         with contextlib.suppress(OSError):
@@ -298,6 +359,8 @@ class VideoWorker:
                 self._answer = answer
 
     def _last_error_line(self) -> str:
+        if self._errors.closed:
+            return ""
         self._errors.seek(0)
         lines = [line.strip() for line in self._errors.read().decode(errors="replace")
                  .splitlines() if line.strip()]
@@ -314,13 +377,15 @@ class _CancelledError(Exception):
 class _Inbox:
     """Messages from the parent, read by a thread as they come so the pipe never fills.
 
-    The end of the input before a ``finish`` message cancels at once, whatever is queued.
+    The end of the input before a ``finish`` message cancels at once, whatever is queued; a
+    ``stop`` message sets :attr:`stopped` at once instead of being queued.
     """
 
     def __init__(self, stream) -> None:
         self._stream = stream
         self._messages: queue.Queue[tuple[str, Any]] = queue.Queue()
         self._cancelled = threading.Event()
+        self.stopped = threading.Event()
         threading.Thread(target=self._read, daemon=True).start()
 
     def _read(self) -> None:
@@ -331,6 +396,9 @@ class _Inbox:
                 payload = self._stream.read(header["bytes"]) if header["bytes"] else b""
                 if len(payload) < header["bytes"]:
                     break
+                if header["kind"] == "stop":
+                    self.stopped.set()
+                    continue
                 finished = finished or header["kind"] == "finish"
                 self._messages.put((header["kind"], self._content(header, payload)))
         except (ValueError, KeyError, OSError):
@@ -354,26 +422,67 @@ class _Inbox:
         raise _CancelledError
 
 
+class _Progress:
+    """The worker's progress answers, at most every 0.2 s (and at the last frame); keeps the
+    frames written and the latest total (0 while unknown)."""
+
+    def __init__(self, answer: Callable[..., None]) -> None:
+        self._answer, self._sent_at = answer, 0.0
+        self.frames = self.total = 0
+
+    def __call__(self, done: int, total: int) -> None:
+        self.frames, self.total = done, total
+        now = time.monotonic()
+        if done == total or now - self._sent_at >= 0.2:
+            self._answer(progress=[done, total])
+            self._sent_at = now
+
+
+def _move_files(files: VideoFiles, folder: Path) -> dict[str, Path | None]:
+    """Move the closed files into ``folder``, each under a hidden name first and then renamed,
+    so that ``folder`` never holds part of a file. SIGTERM (:meth:`VideoWorker.cancel`) is
+    blocked from here on: files moved are files the parent is told of."""
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+    folder.mkdir(parents=True, exist_ok=True)
+    moved: dict[str, Path | None] = {}
+    for key, path in (("mp4", files.mp4), ("gif", files.gif),
+                      ("first_frame", files.first_frame)):
+        if path is None:
+            moved[key] = None
+            continue
+        part, target = folder / f".{path.name}.part", folder / path.name
+        try:
+            shutil.move(path, part)
+            os.replace(part, target)
+        finally:
+            part.unlink(missing_ok=True)
+        moved[key] = target
+    return moved
+
+
 def _render_stream(model, first: np.ndarray, inbox: _Inbox, settings: VideoSettings,
-                   progress: FrameProgress) -> RenderedVideo:
-    """Render the samples as they come into a staging folder; move the files at ``finish``."""
+                   progress: _Progress) -> RenderedVideo:
+    """Render the samples as they come into a staging folder; move the files at ``finish``.
+
+    Once stopped, the samples still queued are only read (for the number of frames due) up
+    to ``finish``.
+    """
     sampler = FrameSampler(settings.fps)
     finish: dict[str, Any] = {}
+    latest = float(first[-1, 0])  # time of the latest sample received [s]
 
     def states(rows: np.ndarray) -> Iterator[np.ndarray]:
+        nonlocal latest
         while True:
             if rows.shape[1] != model.nq + 1:
                 raise VideoError(f"samples of {rows.shape[1] - 1} joint positions for a model "
                                  f"with nq = {model.nq}")
+            latest = float(rows[-1, 0])
             yield from sampler.add(rows[:, 0], rows[:, 1:])
-            kind, content = inbox.get()
-            while kind == "model":
-                kind, content = inbox.get()
-            if kind == "finish":
-                finish.update(content)
+            rows = _next_samples(inbox, finish)
+            if rows is None:
                 yield from sampler.finish()
                 return
-            rows = content
 
     staging = Path(tempfile.mkdtemp(prefix="pneumaquad-video-"))
     try:
@@ -383,16 +492,28 @@ def _render_stream(model, first: np.ndarray, inbox: _Inbox, settings: VideoSetti
         files = write_video_files(
             frames, staging, settings.fps, preview, progress=progress,
             frame_total=lambda: sampler.frames if sampler.finished else 0,
-            duration=lambda: sampler.duration)
-        folder = Path(finish["folder"])
-        folder.mkdir(parents=True, exist_ok=True)
-        moved = {}
-        for key, path in (("mp4", files.mp4), ("gif", files.gif),
-                          ("first_frame", files.first_frame)):
-            moved[key] = Path(shutil.move(path, folder / path.name)) if path else None
+            duration=lambda: sampler.duration, stop=inbox.stopped.is_set)
+        while not finish:  # stopped: the rest of the run is not rendered
+            rows = _next_samples(inbox, finish)
+            latest = latest if rows is None else float(rows[-1, 0])
+        moved = _move_files(files, Path(finish["folder"]))
     finally:
         shutil.rmtree(staging, ignore_errors=True)
-    return RenderedVideo(moved["mp4"], moved["gif"], moved["first_frame"], sampler.frames)
+    due = (sampler.frames if sampler.finished
+           else video_frame_count(latest - float(first[0, 0]), settings.fps))
+    return RenderedVideo(moved["mp4"], moved["gif"], moved["first_frame"], progress.frames,
+                         due)
+
+
+def _next_samples(inbox: _Inbox, finish: dict[str, Any]) -> np.ndarray | None:
+    """The next samples from ``inbox``; None at ``finish``, whose content goes to ``finish``."""
+    kind, content = inbox.get()
+    while kind == "model":
+        kind, content = inbox.get()
+    if kind == "finish":
+        finish.update(content)
+        return None
+    return content
 
 
 def _render(inbox: _Inbox, settings: VideoSettings, progress: _Progress) -> RenderedVideo:
@@ -411,25 +532,18 @@ def _render(inbox: _Inbox, settings: VideoSettings, progress: _Progress) -> Rend
     if content["first_frame_only"]:
         path = render_first_frame(folder, width=settings.width, height=settings.height,
                                   quality=settings.quality)
-        return RenderedVideo(None, None, path, 1)
-    files = render_run_video(folder, fps=settings.fps, width=settings.width,
-                             height=settings.height, gif=settings.gif,
-                             quality=settings.quality, progress=progress)
-    return RenderedVideo(files.mp4, files.gif, files.first_frame, progress.frames)
-
-
-class _Progress:
-    """The worker's progress answers, at most every 0.2 s (and at the last frame)."""
-
-    def __init__(self, answer: Callable[..., None]) -> None:
-        self._answer, self._sent_at, self.frames = answer, 0.0, 0
-
-    def __call__(self, done: int, total: int) -> None:
-        self.frames = done
-        now = time.monotonic()
-        if done == total or now - self._sent_at >= 0.2:
-            self._answer(progress=[done, total])
-            self._sent_at = now
+        return RenderedVideo(None, None, path, 1, 1)
+    staging = Path(tempfile.mkdtemp(prefix="pneumaquad-video-"))
+    try:
+        files = render_run_video(folder, output=staging, fps=settings.fps,
+                                 width=settings.width, height=settings.height,
+                                 gif=settings.gif, quality=settings.quality,
+                                 progress=progress, stop=inbox.stopped.is_set)
+        moved = _move_files(files, folder)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return RenderedVideo(moved["mp4"], moved["gif"], moved["first_frame"], progress.frames,
+                         progress.total)
 
 
 def _terminated(signal_number: int, frame: object) -> None:
@@ -470,7 +584,7 @@ def main(arguments: Sequence[str] | None = None) -> int:
         return 1
     files = {"mp4": video.mp4, "gif": video.gif, "first_frame": video.first_frame}
     answer(files={key: str(path) if path else None for key, path in files.items()},
-           frames=video.frames)
+           frames=video.frames, due=video.due)
     return 0
 
 
