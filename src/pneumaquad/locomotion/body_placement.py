@@ -115,7 +115,9 @@ class BodyPlacement:
 
     def __call__(self, times: np.ndarray) -> np.ndarray:
         """Joint references (len(times), joints) [rad] for the next chunk."""
-        rows = np.array(self.references(times), dtype=float)
+        rows = self.references(times)  # a fresh array of the chain below (corrected here)
+        if not (rows.flags.writeable and rows.dtype == np.float64):
+            rows = np.array(rows, dtype=float)
         time = self.simulation.time
         interval, self.last_time = time - self.last_time, time
         singular = placement_step(

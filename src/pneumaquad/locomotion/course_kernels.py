@@ -27,7 +27,7 @@ from pneumaquad.robot.legs import shift_feet_into
 from .feedback_kernels import GaitTiming, leg_phase, turn_leg
 
 __all__ = ["COURSE_CROSS_TRACK", "COURSE_SET", "GaitTrack", "cross_track_error",
-           "gait_track", "leak_into_turn", "placement_step", "track_index"]
+           "gait_track", "leak_into_turn", "placement_step"]
 
 Array = NDArray[np.float64]
 
@@ -55,13 +55,6 @@ def gait_track(gait: CrawlGait, start: float, duration: float,
                      np.ascontiguousarray(body_positions(gait, times)),
                      np.ascontiguousarray(stance_travel(gait, times)),
                      np.ascontiguousarray(gait.direction, dtype=float))
-
-
-@compiled
-def track_index(start: float, step: float, count: int, time: float) -> int:
-    """Row of a :class:`GaitTrack` table nearest to simulation ``time`` [s], clipped."""
-    index = math.floor((time - start) / step + 0.5)
-    return min(max(index, 0), count - 1)
 
 
 @compiled

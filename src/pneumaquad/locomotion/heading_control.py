@@ -44,7 +44,6 @@ from .course_kernels import (
     GaitTrack,
     cross_track_error,
     leak_into_turn,
-    track_index,
 )
 from .feedback_kernels import HEADING, HEADING_SET, LAST_TIME, ROTATION, heading_step
 
@@ -154,8 +153,8 @@ class HeadingHold:
         """Joint references (len(times), joints) [rad] for the next chunk."""
         rows = np.array(self.references(times), dtype=float)
         track = self.track
-        index = (-1 if track is None else
-                 track_index(track.start, track.step, len(track.body), self.simulation.time))
+        index = -1 if track is None else min(max(round(
+            (self.simulation.time - track.start) / track.step), 0), len(track.body) - 1)
         if self.yaw_rate != 0.0 and self._start is not None:
             heading, start = self._start
             self._state[HEADING] = heading + self.yaw_rate * (self.simulation.time - start)
