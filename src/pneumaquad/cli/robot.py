@@ -45,6 +45,7 @@ from pneumaquad.cli.common import (
     stderr_console,
 )
 from pneumaquad.cli.settings import option_names, settings_options
+from pneumaquad.cli.walk_outcome import print_walk_outcome
 from pneumaquad.io.interruption import InterruptCount, counted_interrupts
 from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.locomotion.walk_settings import WALK_SETTINGS, WalkSettings
@@ -74,7 +75,7 @@ robot_app = command_group(help="The whole quadruped on its 12 pneumatic joints."
 RobotParamsOption = Annotated[
     str, typer.Option("--params", "-p", help="Robot parameter set name or TOML path.")
 ]
-EnvironmentOption = Annotated[str, typer.Option(help="flat, block, ramp or rough.")]
+EnvironmentOption = Annotated[str, typer.Option(help="flat, block, ramp, rough or hill.")]
 SeedOption = Annotated[int, typer.Option(help="Seed of the rough terrain.")]
 #: A phase of simulated time [s] in [0, 3600 s].
 PHASE_TIME = Bounds(0.0, MAX_SIMULATED_TIME, "s", lower_inclusive=True)
@@ -563,44 +564,7 @@ def robot_walk(
             raise typer.BadParameter(str(error), param_hint=SUPPLY_HINT) from None
         _report(simulation, walk.run, walk.run.summary["description"], worker, video, clock,
                 profile)
-    outcome = walk.outcome
-    if outcome is None:
-        console.print("walking: not judged (the run stopped before the walk began)")
-        return
-    verdict = "success" if outcome["success"] else "failure"
-    if points is not None:
-        console.print(f"waypoints: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])})")
-        for number, leg in enumerate(outcome.get("legs", []), start=1):
-            target, reached = leg["waypoint [m]"], leg["reached [m]"]
-            console.print(f"  waypoint {number} ({target[0]:g}, {target[1]:g}) m: reached "
-                          f"({reached[0]:.3f}, {reached[1]:.3f}) m, error "
-                          f"{leg['waypoint error [m]']:.3f} m; walk "
-                          f"{'success' if leg['success'] else 'failure'} "
-                          f"({', '.join(leg['reasons'])})", highlight=False)
-        return
-    if outcome.get("period [s]", settings.period) != settings.period:
-        console.print(f"the gait cycle was shortened from {settings.period:g} s to "
-                      f"{outcome['period [s]']:g} s (the same speed, a shorter stride): the "
-                      "legs could not reach the plan of the cycle asked", highlight=False)
-    if "distance travelled [m]" not in outcome:  # it did not begin: no verified stance
-        console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])})")
-        return
-    if "turned [deg]" in outcome:
-        console.print(f"turning: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
-                      f"turned {outcome['turned [deg]']:.1f}° of "
-                      f"{outcome['turn asked [deg]']:g}° (error "
-                      f"{outcome['turn error [deg]']:+.1f}°), "
-                      f"drifted {outcome['drift [m]']:.3f} m; stance feet slid "
-                      f"{outcome['largest stance-foot slide [m]']:.2f} m")
-        return
-    console.print(f"walking: [bold]{verdict}[/bold] ({', '.join(outcome['reasons'])}); "
-                  f"travelled {outcome['distance travelled [m]']:.3f} m of {distance:g} m, "
-                  f"air {outcome['air per metre [NL/m]']:.3g} NL/m; negative static margin "
-                  f"{outcome['time with negative static margin [%]']:.0f} % of the time "
-                  f"(loaded feet), tip-over margin "
-                  f"{outcome['time with negative tip-over margin [%]']:.1f} % (median "
-                  f"{outcome['median tip-over margin [m]'] * 1000:.0f} mm); stance feet slid "
-                  f"{outcome['largest stance-foot slide [m]']:.2f} m")
+    print_walk_outcome(walk.outcome, settings, waypoints=points is not None)
 
 
 @robot_app.command("export")
