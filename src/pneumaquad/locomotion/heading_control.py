@@ -75,6 +75,8 @@ class HeadingHold:
     turn_leak : float
         Body turn per cycle [rad] per radian of foot rotation (with ``track``).
 
+    Notes
+    -----
     The arithmetic of a call is compiled (:func:`.feedback_kernels.heading_step`,
     :func:`.course_kernels.cross_track_error`, :func:`.course_kernels.leak_into_turn`)
     on arrays allocated here; :attr:`heading`, :attr:`rotation` and :attr:`last_time`

@@ -52,6 +52,8 @@ class SwingHeightCorrection:
     fade : float [s]
         Time constant of the correction's fade after touchdown.
 
+    Notes
+    -----
     The arithmetic of a call is compiled (:func:`.feedback_kernels.swing_step`) on arrays
     allocated here: :attr:`lift_off_height`, :attr:`was_stance` and :attr:`correction`
     are updated in place.
