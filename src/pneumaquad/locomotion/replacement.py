@@ -90,15 +90,6 @@ def _sways(feet_body: Array, moving: list[int], lateral: float, centre: Array):
                 yield sway * direction
 
 
-def _sway_for(feet_body: Array, moving: list[int], lateral: float, centre: Array) -> Array:
-    """The shortest of :func:`_sways`; raises :class:`UnreachablePlanError` if none."""
-    for sway in _sways(feet_body, moving, lateral, centre):
-        return sway
-    raise UnreachablePlanError(
-        f"no sway up to {LARGEST_SWAY:g} m keeps the centre of mass {REPLACEMENT_MARGIN:g} m "
-        f"inside the feet left down while legs {moving} are re-placed")
-
-
 def _step(begin: float, leg: int, pose: Array, start: Array, end: Array, tables: list,
           lift: Array):
     """References of one leg's move from foot ``start`` to ``end`` (thorax frame) on an
