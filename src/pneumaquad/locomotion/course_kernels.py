@@ -24,10 +24,10 @@ from pneumaquad.gait.crawl import CrawlGait, body_positions, stance_travel
 from pneumaquad.robot.kinematics import ChainWorkspace, LegTables, solve_3x3
 from pneumaquad.robot.legs import shift_feet_into
 
-from .feedback_kernels import GaitTiming, leg_phase, turn_leg
+from .feedback_kernels import HEADING, ROTATION, GaitTiming, heading_step, leg_phase, turn_leg
 
 __all__ = ["COURSE_CROSS_TRACK", "COURSE_SET", "GaitTrack", "cross_track_error",
-           "gait_track", "leak_into_turn", "placement_step"]
+           "gait_track", "hold_step", "leak_into_turn", "placement_step"]
 
 Array = NDArray[np.float64]
 
@@ -98,6 +98,35 @@ def leak_into_turn(rows: Array, travel: Array, last_travel: Array, has_last: boo
                                                   tables, workspace, matrices):
             return leg
     return -1
+
+
+@compiled
+def hold_step(rows: Array, thorax_matrix: Array, nominal: Array, to_body: Array,
+              tables: LegTables, workspace: ChainWorkspace, matrices: Array, state: Array,
+              time: float, gain: float, limit: float, steer: bool, position: Array,
+              planned: Array, start_yaw: float, direction: Array, course: Array,
+              course_gain: float, course_limit: float, leak: float, travel: Array,
+              last_travel: Array, leg_turns: Array, travel_state: Array) -> int:
+    """One chunk of :class:`.heading_control.HeadingHold` in one compiled call: with
+    ``steer``, the heading held (``state[HEADING]``) is ``start_yaw`` less the course
+    bias, ``course_gain`` times the cross-track error (:func:`cross_track_error`) within
+    ±``course_limit``; then :func:`.feedback_kernels.heading_step`; then, with ``leak``
+    > 0, :func:`leak_into_turn` from the feet's stance ``travel`` now (``last_travel`` and
+    ``travel_state[0]`` (set 0/1) updated). Returns -1, or the leg whose Jacobian is
+    singular."""
+    if steer:
+        error = cross_track_error(position, planned, start_yaw, direction, course)
+        bias = min(max(course_gain * error, -course_limit), course_limit)
+        state[HEADING] = start_yaw - bias
+    singular = heading_step(rows, thorax_matrix, nominal, to_body, tables, workspace,
+                            matrices, state, time, gain, limit)
+    if singular < 0 and leak > 0.0:
+        singular = leak_into_turn(rows, travel, last_travel, travel_state[0] != 0.0,
+                                  state[ROTATION], leak, leg_turns, to_body, tables,
+                                  workspace, matrices)
+        last_travel[:] = travel
+        travel_state[0] = 1.0
+    return singular
 
 
 @compiled

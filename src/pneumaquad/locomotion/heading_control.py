@@ -39,13 +39,8 @@ from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
 from pneumaquad.robot.legs import leg_dh_table
 from pneumaquad.robot.simulation import RobotSimulation
 
-from .course_kernels import (
-    COURSE_CROSS_TRACK,
-    GaitTrack,
-    cross_track_error,
-    leak_into_turn,
-)
-from .feedback_kernels import HEADING, HEADING_SET, LAST_TIME, ROTATION, heading_step
+from .course_kernels import COURSE_CROSS_TRACK, GaitTrack, cross_track_error, hold_step
+from .feedback_kernels import HEADING, HEADING_SET, LAST_TIME, ROTATION
 
 __all__ = ["HeadingHold"]
 
@@ -77,9 +72,9 @@ class HeadingHold:
 
     Notes
     -----
-    The arithmetic of a call is compiled (:func:`.feedback_kernels.heading_step`,
-    :func:`.course_kernels.cross_track_error`, :func:`.course_kernels.leak_into_turn`)
-    on arrays allocated here; :attr:`heading`, :attr:`rotation` and :attr:`last_time`
+    The arithmetic of a call is one compiled call (:func:`.course_kernels.hold_step`:
+    the course bias, :func:`.feedback_kernels.heading_step` and the turn leak) on arrays
+    allocated here; :attr:`heading`, :attr:`rotation` and :attr:`last_time`
     are views of its state.
     """
 
@@ -96,7 +91,8 @@ class HeadingHold:
         legs = len(simulation.robot.legs)
         self._course = np.zeros(6)  # course_kernels.cross_track_error's state
         self._last_travel = np.zeros(legs)  # each foot's stance travel at the last call
-        self._travel_set = False
+        self._travel_state = np.zeros(1)  # 1 once _last_travel holds a call's travel
+        self._no_plan = np.zeros(2)  # stands in for the plan's arrays without a track
         self.leg_turns = np.zeros(legs)  # [rad] each foot's turn from the leak
         self._start: tuple[float, float] | None = None  # (heading [rad], time [s])
         self.references = references
@@ -160,21 +156,18 @@ class HeadingHold:
         if self.yaw_rate != 0.0 and self._start is not None:
             heading, start = self._start
             self._state[HEADING] = heading + self.yaw_rate * (self.simulation.time - start)
-        elif track is not None and self._start is not None:
-            error = cross_track_error(self._thorax_position, track.body[index],
-                                      self._start[0], track.direction, self._course)
-            bias = min(max(self.course_gain * error, -self.course_limit), self.course_limit)
-            self._state[HEADING] = self._start[0] - bias
-        singular = heading_step(rows, self._thorax_matrix, self._nominal, self.to_body,
-                                self._stacked, self._workspace, self._matrices, self._state,
-                                self.simulation.time, self.gain, self.limit)
-        if singular < 0 and track is not None and self.turn_leak > 0.0:
-            singular = leak_into_turn(rows, track.travel[index], self._last_travel,
-                                      self._travel_set, self.rotation, self.turn_leak,
-                                      self.leg_turns, self.to_body, self._stacked,
-                                      self._workspace, self._matrices)
-            self._last_travel[:] = track.travel[index]
-            self._travel_set = True
+        steer = track is not None and self._start is not None and self.yaw_rate == 0.0
+        leak = self.turn_leak if track is not None else 0.0
+        singular = hold_step(
+            rows, self._thorax_matrix, self._nominal, self.to_body, self._stacked,
+            self._workspace, self._matrices, self._state, self.simulation.time, self.gain,
+            self.limit, steer, self._thorax_position,
+            self._no_plan if track is None else track.body[index],
+            0.0 if self._start is None else self._start[0],
+            self._no_plan if track is None else track.direction, self._course,
+            self.course_gain, self.course_limit, leak,
+            self._last_travel if track is None else track.travel[index], self._last_travel,
+            self.leg_turns, self._travel_state)
         if singular >= 0:
             raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
         if self._start is None:
