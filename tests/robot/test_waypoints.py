@@ -119,3 +119,59 @@ def test_walks_an_l_shaped_path_through_two_waypoints(tmp_path: Path) -> None:
     assert outcome["final waypoint error [m]"] < 0.1
     assert all(check["verified"] for check in walk.run.summary["checks"].values())
     assert (tmp_path / "path" / "waypoints.png").exists()
+
+
+def test_the_footholds_turn_the_body_back_to_its_heading() -> None:
+    """With ``heading`` given, the re-placement measures the yaw when it begins and turns
+    the new footholds about the body by minus its error: the feet of the pose before the
+    last move keep their distances to each other and are turned by −error (so the move
+    into the next pose turns the body back); without it, nothing is turned."""
+    from pneumaquad.locomotion.replacement import _planned, replacement_phases
+    from pneumaquad.locomotion.walk import plan_walk, thorax_rotation
+    from pneumaquad.locomotion.walking import reachable_plan, walking_gait
+    from pneumaquad.params import load_robot
+    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.robot.legs import leg_dh_table, thorax_frame_points
+    from pneumaquad.robot.simulation import RobotSimulation
+
+    simulation = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    robot = simulation.robot
+    plans = []
+    for leg in waypoint_settings(WalkSettings(), np.array([[0.3, 0.0], [0.3, 0.3]])):
+        walked, posture = reachable_plan(robot, leg)
+        gait = walking_gait(robot, walked, posture)
+        plans.append((gait, plan_walk(robot, gait, walked.duration())))
+    start, end = plans[0][1].references[-1], plans[1][1].references[0]
+    centre = plans[1][0].com_offset
+    error = math.radians(4.0)
+    import mujoco
+
+    from pneumaquad.robot.recording import thorax_attitude
+
+    yawed = np.zeros(4)  # the thorax's placement turned by +4° about the vertical
+    mujoco.mju_mulQuat(yawed, np.array([math.cos(error / 2), 0.0, 0.0, math.sin(error / 2)]),
+                       simulation.model.body_quat[robot.thorax_id])
+    simulation.set_pose(start, thorax_quaternion=yawed)
+    assert float(thorax_attitude(simulation)[2]) == pytest.approx(error, abs=1e-9)
+
+    tables = [leg_dh_table(robot, leg) for leg in robot.legs]
+    to_body = thorax_rotation(robot)
+
+    def footholds(phases) -> np.ndarray:  # feet (body frame x, y) before the last move
+        pose = phases[-1].references(np.array([phases[-1].references.plan.arguments[2]]))[0]
+        return np.array([(to_body @ thorax_frame_points(table, pose[3 * k: 3 * k + 3]))[:2]
+                         for k, table in enumerate(tables)])
+
+    turned = replacement_phases(simulation, start, end, 0.0, centre, heading=0.0)
+    unturned = replacement_phases(simulation, start, end, 0.0, centre)
+    feet_turned, feet_unturned = footholds(turned), footholds(unturned)
+    left, right = robot.legs.index("front_left"), robot.legs.index("rear_left")
+    distances = [np.linalg.norm(feet[left] - feet[right]) for feet in (feet_turned,
+                                                                      feet_unturned)]
+    assert distances[0] == pytest.approx(distances[1], abs=0.002)  # a turn, not a stretch
+    angles = [math.atan2(*(feet[left] - feet[right])[::-1]) for feet in (feet_turned,
+                                                                         feet_unturned)]
+    assert angles[0] - angles[1] == pytest.approx(-error, abs=math.radians(0.3))
+    direct = _planned(simulation, start, end, 0.0, centre, "re-place", None, turn=-error)
+    last = direct[-1].references(np.array([0.0]))[0]
+    assert last == pytest.approx(turned[-1].references(np.array([0.0]))[0], abs=1e-12)

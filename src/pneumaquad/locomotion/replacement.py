@@ -16,6 +16,7 @@ in the body frame.
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -24,6 +25,7 @@ from numpy.typing import NDArray
 from pneumaquad.gait.stability import support_margins
 from pneumaquad.robot.experiment import Phase
 from pneumaquad.robot.legs import leg_dh_table, solve_leg, thorax_frame_points
+from pneumaquad.robot.recording import thorax_attitude
 from pneumaquad.robot.simulation import RobotSimulation
 from pneumaquad.robot.stand_up import smooth_ramp
 
@@ -136,7 +138,8 @@ def _reachable_sway(tables: list, to_body: Array, before: Array, side: list[int]
 
 def replacement_phases(simulation: RobotSimulation, start_pose: Array, end_pose: Array,
                        begin: float, centre: Array, name: str = "re-place",
-                       body_move: Array | None = None) -> list[Phase]:
+                       body_move: Array | None = None,
+                       heading: float | None = None) -> list[Phase]:
     """Phases that move the stance of ``start_pose`` into that of ``end_pose`` (module
     docstring), from simulation time ``begin`` [s].
 
@@ -154,22 +157,73 @@ def replacement_phases(simulation: RobotSimulation, start_pose: Array, end_pose:
     body_move : (2,) [m], optional
         Where the body is to end, body frame x, y, from where it stands now: the new
         footholds are placed about it (default: where it stands).
+    heading : float [rad], optional
+        The yaw the body is to end with: when the phases begin, the new footholds are
+        turned about the body by the measured yaw's error from it, so the move into the
+        next pose turns the body back (a walk's end and the re-placement's own steps turn
+        it by a few degrees; default: no turn).
 
     Raises
     ------
     UnreachablePlanError
         Where no sway keeps the centre of mass inside the three feet down, or a foot's
-        new place is out of its leg's reach.
+        new place is out of its leg's reach (checked for the footholds unturned; turned
+        ones that cannot be reached are walked unturned).
     """
+    plan = _Replacement(simulation, np.asarray(start_pose, float),
+                        np.asarray(end_pose, float), begin, np.asarray(centre, float), name,
+                        body_move, heading)
+    return [Phase(phase.name, phase.duration, _Deferred(plan, k), phase.closed_loop)
+            for k, phase in enumerate(plan.phases)]
+
+
+class _Replacement:
+    """The phases of :func:`replacement_phases`, planned for the footholds unturned and
+    planned again, turned by the yaw error, when the first phase begins."""
+
+    def __init__(self, simulation: RobotSimulation, start_pose: Array, end_pose: Array,
+                 begin: float, centre: Array, name: str, body_move: Array | None,
+                 heading: float | None) -> None:
+        self.simulation, self.heading = simulation, heading
+        self.arguments = (start_pose, end_pose, begin, centre, name, body_move)
+        self.phases = _planned(simulation, *self.arguments, turn=0.0)
+        self.turned = heading is None  # nothing to turn: the plan stands
+
+    def references(self, phase: int, times: np.ndarray) -> np.ndarray:
+        """Phase ``phase``'s references at ``times`` (turning the footholds first, once)."""
+        if not self.turned:
+            self.turned = True
+            error = float(thorax_attitude(self.simulation)[2]) - self.heading
+            error = math.remainder(error, 2.0 * math.pi)
+            with contextlib.suppress(UnreachablePlanError):
+                self.phases = _planned(self.simulation, *self.arguments, turn=-error)
+        return self.phases[phase].references(times)
+
+
+class _Deferred:
+    """Reference function of one phase of a :class:`_Replacement`."""
+
+    def __init__(self, plan: _Replacement, phase: int) -> None:
+        self.plan, self.phase = plan, phase
+
+    def __call__(self, times: np.ndarray) -> np.ndarray:
+        return self.plan.references(self.phase, times)
+
+
+def _planned(simulation: RobotSimulation, start_pose: Array, end_pose: Array, begin: float,
+             centre: Array, name: str, body_move: Array | None, turn: float) -> list[Phase]:
+    """The phases, the new footholds (and the body's move) turned by ``turn`` [rad] about
+    the body's z axis."""
     robot = simulation.robot
     tables = [leg_dh_table(robot, leg) for leg in robot.legs]
     to_body = thorax_rotation(robot)
-    start_pose, end_pose = np.asarray(start_pose, float), np.asarray(end_pose, float)
     feet, targets = _feet(tables, start_pose), _feet(tables, end_pose)
     targets = (to_body @ targets.T).T  # in the body frame: z is up
     targets[:, 2] = (to_body @ feet.T).T[:, 2].mean()  # on the ground the feet stand on
     if body_move is not None:  # footholds about where the body is to end
         targets[:, :2] += np.asarray(body_move, dtype=float)
+    cosine, sine = math.cos(turn), math.sin(turn)
+    targets[:, :2] = targets[:, :2] @ np.array([[cosine, sine], [-sine, cosine]])
     targets = (to_body.T @ targets.T).T
     lift = to_body.T @ np.array([0.0, 0.0, STEP_LIFT])
     closed = np.ones(robot.joint_count, dtype=bool)
@@ -184,7 +238,7 @@ def replacement_phases(simulation: RobotSimulation, start_pose: Array, end_pose:
         for leg in side:  # a sway over the three feet down, then the step
             shift, swayed = _reachable_sway(
                 tables, to_body, (to_body @ current.T).T[None, :, :2], [leg], direction,
-                np.asarray(centre, float), current, pose)
+                centre, current, pose)
             phases.append(Phase(f"{name}: sway for {robot.legs[leg]}", SWAY_TIME,
                                 smooth_ramp(pose, swayed, time, SWAY_TIME), closed))
             time += SWAY_TIME

@@ -6,7 +6,8 @@ points from one waypoint to the next (the omnidirectional crawl, :mod:`.walking`
 speed, at most the one asked, that makes the leg a whole number of gait cycles, so that
 each walk ends where planned. Between two legs of the path the feet move from where the
 first walk left them to where the second begins, a foot at a time
-(:func:`.replacement.replacement_phases`), the legs shed their internal forces
+(:func:`.replacement.replacement_phases`, its footholds turned so that the body ends
+at the yaw it lay in), the legs shed their internal forces
 (:func:`.walking.settled_hold`), and the next walk begins from a verified stance. Each
 walk holds its course from where it begins; the errors of the walks add up, and each
 waypoint is judged against one stride (:func:`waypoint_outcome`).
@@ -167,7 +168,8 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
                 simulation, before.plan.references[-1], after.plan.references[0], time,
                 after.gait.com_offset, f"re-place {after.phase}",
                 body_move=_sway(after.gait, 0.0) - _sway(before.gait,
-                                                         before.settings.duration()))
+                                                         before.settings.duration()),
+                heading=0.0)  # and turned back to the yaw the robot lay in
         except UnreachablePlanError as error:
             raise WalkSettingsError(f"the feet cannot be re-placed for {after.phase}: "
                                     f"{error}", ("waypoints",)) from None
