@@ -55,12 +55,9 @@ def test_the_sway_keeps_the_centre_of_mass_inside_the_feet_left_down() -> None:
     assert next(_sways(np.array([narrow, narrow]), [2, 0], -1.0, np.zeros(2)), None) is None
 
 
-def test_the_feet_are_re_placed_one_at_a_time_into_the_next_pose() -> None:
-    """Between a forward walk and a sideways one: for each leg a sway over the other three
-    feet and its step (left legs first, rear before front), then into the next pose; one
-    leg moves per step phase, the feet stand still in a sway, and the last phase ends in
-    the next walk's first pose."""
-    from pneumaquad.locomotion.replacement import replacement_phases
+def _forward_then_sideways():
+    """A standing quadruped's simulation, the last pose of a 0.3 m forward walk, the first
+    pose of a 0.3 m walk to the left after it, and that walk's centre of mass offset."""
     from pneumaquad.locomotion.walk import plan_walk
     from pneumaquad.locomotion.walking import reachable_plan, walking_gait
     from pneumaquad.params import load_robot
@@ -68,14 +65,25 @@ def test_the_feet_are_re_placed_one_at_a_time_into_the_next_pose() -> None:
     from pneumaquad.robot.simulation import RobotSimulation
 
     simulation = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
-    robot = simulation.robot
     plans = []
     for leg in waypoint_settings(WalkSettings(), np.array([[0.3, 0.0], [0.3, 0.3]])):
-        walked, posture = reachable_plan(robot, leg)
-        gait = walking_gait(robot, walked, posture)
-        plans.append((gait, plan_walk(robot, gait, walked.duration())))
-    start, end = plans[0][1].references[-1], plans[1][1].references[0]
-    phases = replacement_phases(simulation, start, end, 10.0, plans[1][0].com_offset)
+        walked, posture = reachable_plan(simulation.robot, leg)
+        gait = walking_gait(simulation.robot, walked, posture)
+        plans.append((gait, plan_walk(simulation.robot, gait, walked.duration())))
+    return (simulation, plans[0][1].references[-1], plans[1][1].references[0],
+            plans[1][0].com_offset)
+
+
+def test_the_feet_are_re_placed_one_at_a_time_into_the_next_pose() -> None:
+    """Between a forward walk and a sideways one: for each leg a sway over the other three
+    feet and its step (left legs first, rear before front), then into the next pose; one
+    leg moves per step phase, the feet stand still in a sway, and the last phase ends in
+    the next walk's first pose."""
+    from pneumaquad.locomotion.replacement import replacement_phases
+
+    simulation, start, end, centre = _forward_then_sideways()
+    robot = simulation.robot
+    phases = replacement_phases(simulation, start, end, 10.0, centre)
     names = [phase.name for phase in phases]
     order = ["rear_left", "front_left", "rear_right", "front_right"]
     assert names == [f"re-place: {part}" for leg in order
@@ -127,22 +135,11 @@ def test_the_footholds_turn_the_body_back_to_its_heading() -> None:
     last move keep their distances to each other and are turned by −error (so the move
     into the next pose turns the body back); without it, nothing is turned."""
     from pneumaquad.locomotion.replacement import _planned, replacement_phases
-    from pneumaquad.locomotion.walk import plan_walk, thorax_rotation
-    from pneumaquad.locomotion.walking import reachable_plan, walking_gait
-    from pneumaquad.params import load_robot
-    from pneumaquad.robot.builder import build_robot
+    from pneumaquad.locomotion.walk import thorax_rotation
     from pneumaquad.robot.legs import leg_dh_table, thorax_frame_points
-    from pneumaquad.robot.simulation import RobotSimulation
 
-    simulation = RobotSimulation(build_robot(load_robot("crr-quadruped"), "quadruped"))
+    simulation, start, end, centre = _forward_then_sideways()
     robot = simulation.robot
-    plans = []
-    for leg in waypoint_settings(WalkSettings(), np.array([[0.3, 0.0], [0.3, 0.3]])):
-        walked, posture = reachable_plan(robot, leg)
-        gait = walking_gait(robot, walked, posture)
-        plans.append((gait, plan_walk(robot, gait, walked.duration())))
-    start, end = plans[0][1].references[-1], plans[1][1].references[0]
-    centre = plans[1][0].com_offset
     error = math.radians(4.0)
     import mujoco
 
