@@ -1,16 +1,18 @@
 """A walk through a list of waypoints: straight crawls between them, the feet re-placed
 at each.
 
-The robot keeps the yaw it lay in and walks each leg of the path at the heading that
+Each walk holds the yaw it begins with and walks its leg of the path at the heading that
 points from one waypoint to the next (the omnidirectional crawl, :mod:`.walking`), at the
 speed, at most the one asked, that makes the leg a whole number of gait cycles, so that
 each walk ends where planned. Between two legs of the path the feet move from where the
 first walk left them to where the second begins, a foot at a time
-(:func:`.replacement.replacement_phases`, its footholds turned so that the body ends
-at the yaw it lay in), the legs shed their internal forces
-(:func:`.walking.settled_hold`), and the next walk begins from a verified stance. Each
-walk holds its course from where it begins; the errors of the walks add up, and each
-waypoint is judged against one stride (:func:`waypoint_outcome`).
+(:func:`.replacement.replacement_phases`), its footholds turned so that the body ends at
+the yaw the robot lay in (walks holding that yaw themselves began with a heading
+correction of up to 3°, and a sideways walk after a backward one failed on its margin);
+the legs shed their internal forces (:func:`.walking.settled_hold`), and the next walk
+begins from a verified stance. Each walk holds its course from where it begins; the
+errors of the walks add up, and each waypoint is judged against one stride
+(:func:`waypoint_outcome`).
 
 Waypoints are (x, y) [m] in the frame of the robot's start: x forward, y to the left,
 from the body's position when the first walk begins (its planned sway taken out).
@@ -155,11 +157,11 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
                             posture))
     first = path[0]
     phases, _ = walking_phases(simulation, first.settings, first.posture)
-    phases = phases[:-2]  # the first walk, re-made below with the path's heading
+    phases = phases[:-2]  # the first walk, re-made below under its path name
     closed = np.ones(robot.joint_count, dtype=bool)
     time = sum(phase.duration for phase in phases)
     phases.append(walk_phase(simulation, first.settings, first.gait, first.plan, time,
-                             first.phase, heading=0.0))
+                             first.phase))
     time += phases[-1].duration
     for before, after in itertools.pairwise(path):
         try:
@@ -184,7 +186,7 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
             phases.append(replace(hold, name=f"hold before {after.phase}"))
         time += hold.duration
         phases.append(walk_phase(simulation, after.settings, after.gait, after.plan, time,
-                                 after.phase, heading=0.0))
+                                 after.phase))
         time += phases[-1].duration
     phases.append(Phase("stop", 1.0, path[-1].plan.references[-1], closed))
     return phases, path
