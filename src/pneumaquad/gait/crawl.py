@@ -48,6 +48,7 @@ __all__ = [
     "LEGS",
     "CrawlGait",
     "body_positions",
+    "body_sway",
     "foot_positions_ground",
     "foot_targets",
     "gait_offsets",
@@ -307,12 +308,18 @@ def _lateral_sway(gait: CrawlGait, times: Array) -> Array:
     return np.where(cycle < 0.5, to_second, to_first)
 
 
+def body_sway(gait: CrawlGait, times: ArrayLike) -> Array:
+    """The body's sway (n, 2) [m] in the ground frame: its offset from steady travel."""
+    times = np.asarray(times, dtype=float)
+    sway = np.zeros((*times.shape, 2))
+    sway[..., sway_axis(gait)] = _lateral_sway(gait, times)
+    return sway
+
+
 def body_positions(gait: CrawlGait, times: ArrayLike) -> Array:
     """Body origin (n, 2) [m] in the ground frame: travel at ``gait.speed`` plus sway."""
     times = np.asarray(times, dtype=float)
-    position = gait.speed * times[..., None] * gait.direction
-    position[..., sway_axis(gait)] += _lateral_sway(gait, times)
-    return position
+    return gait.speed * times[..., None] * gait.direction + body_sway(gait, times)
 
 
 def stance_travel(gait: CrawlGait, times: ArrayLike) -> Array:

@@ -50,8 +50,12 @@ __all__ = [
     "WalkSettings",
     "contact_slide",
     "gait_support_margins",
+    "planned_walk",
     "reachable_plan",
+    "settled_hold",
+    "stand_up_into",
     "tip_over_series",
+    "walk_phase",
     "walking_gait",
     "walking_outcome",
     "walking_phases",
@@ -143,7 +147,23 @@ def walking_phases(
     ValueError
         Settings the gait refuses (:class:`pneumaquad.gait.crawl.CrawlGait`).
     """
-    robot = simulation.robot
+    gait, plan, posture = planned_walk(simulation.robot, settings, posture)
+    phases = stand_up_into(simulation, settings, plan, posture)
+    walk_start = sum(phase.duration for phase in phases)
+    phases += [
+        walk_phase(simulation, settings, gait, plan, walk_start),
+        Phase("stop", 1.0, plan.references[-1],
+              np.ones(simulation.robot.joint_count, dtype=bool)),
+    ]
+    return phases, plan
+
+
+def planned_walk(robot: RobotModel, settings: WalkSettings, posture: np.ndarray | None = None
+                 ) -> tuple[CrawlGait, WalkPlan, np.ndarray]:
+    """The gait of ``settings`` about ``posture`` [rad] (by default
+    :func:`.reach.choose_posture`'s), its plan for the walk's duration, and the posture;
+    raises :class:`~.reach.UnreachablePlanError` when the legs cannot reach the plan
+    (:func:`.reach.check_reach`) and ValueError for settings the gait refuses."""
 
     def gait_for(angles: np.ndarray) -> CrawlGait:
         return walking_gait(robot, settings, angles)
@@ -151,9 +171,17 @@ def walking_phases(
     if posture is None:
         posture = choose_posture(robot, gait_for, WALKING_ANGLES)
     gait = gait_for(posture)
-    duration = settings.duration()
-    plan = plan_walk(robot, gait, duration)
+    plan = plan_walk(robot, gait, settings.duration())
     check_reach(robot, gait, plan.cycle, plan.start_up)
+    return gait, plan, posture
+
+
+def stand_up_into(simulation: RobotSimulation, settings: WalkSettings, plan: WalkPlan,
+                  posture: np.ndarray) -> list[Phase]:
+    """The phases that stand the robot up from lying into ``plan``'s first pose and hold
+    it (:func:`walking_phases`: a pair of legs at a time where the supply is short or the
+    ``posture`` [rad] is not the default one, the hold of a staged rise settled)."""
+    robot = simulation.robot
     closed = np.ones(robot.joint_count, dtype=bool)
     first = plan.references[0]
     symmetric = leg_posture(first)
@@ -179,12 +207,7 @@ def walking_phases(
         # feet: the first half of the hold sheds those forces under force control
         at = [phase.name for phase in phases].index("hold")
         phases[at:at + 1] = settled_hold(simulation, phases[at], settings)
-    walk_start = sum(phase.duration for phase in phases)
-    phases += [
-        walk_phase(simulation, settings, gait, plan, walk_start),
-        Phase("stop", 1.0, plan.references[-1], closed),
-    ]
-    return phases, plan
+    return phases
 
 
 def settled_hold(simulation: RobotSimulation, hold: Phase,

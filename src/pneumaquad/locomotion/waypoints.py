@@ -28,21 +28,21 @@ from typing import Any
 
 import numpy as np
 
-from pneumaquad.gait.crawl import CrawlGait, body_positions
+from pneumaquad.gait.crawl import CrawlGait, body_sway
 from pneumaquad.robot.experiment import Phase
 from pneumaquad.robot.simulation import RobotSimulation
 
-from .reach import UnreachablePlanError, check_reach
+from .reach import UnreachablePlanError
 from .replacement import replacement_phases
-from .walk import WalkPlan, plan_walk
+from .walk import WalkPlan
 from .walk_settings import WalkSettings, WalkSettingsError
 from .walking import (
+    planned_walk,
     reachable_plan,
     settled_hold,
+    stand_up_into,
     walk_phase,
-    walking_gait,
     walking_outcome,
-    walking_phases,
 )
 
 __all__ = ["PathLeg", "parse_waypoints", "waypoint_outcome", "waypoint_phases",
@@ -142,9 +142,7 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
                 walked, posture = reachable_plan(robot, _whole_cycles(walked))
             if posture is None:
                 raise UnreachablePlanError("no posture reaches the plan")
-            gait = walking_gait(robot, walked, posture)
-            plan = plan_walk(robot, gait, walked.duration())
-            check_reach(robot, gait, plan.cycle, plan.start_up)
+            gait, plan, posture = planned_walk(robot, walked, posture)
         except UnreachablePlanError as error:
             raise WalkSettingsError(
                 f"the legs cannot walk {where} (heading "
@@ -156,8 +154,7 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
         path.append(PathLeg(walked, gait, plan, f"walk {number}", np.asarray(point),
                             posture))
     first = path[0]
-    phases, _ = walking_phases(simulation, first.settings, first.posture)
-    phases = phases[:-2]  # the first walk, re-made below under its path name
+    phases = stand_up_into(simulation, first.settings, first.plan, first.posture)
     closed = np.ones(robot.joint_count, dtype=bool)
     time = sum(phase.duration for phase in phases)
     phases.append(walk_phase(simulation, first.settings, first.gait, first.plan, time,
@@ -169,8 +166,8 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
             moves = replacement_phases(
                 simulation, before.plan.references[-1], after.plan.references[0], time,
                 after.gait.com_offset, f"re-place {after.phase}",
-                body_move=_sway(after.gait, 0.0) - _sway(before.gait,
-                                                         before.settings.duration()),
+                body_move=(_sway_at(after.gait, 0.0)
+                           - _sway_at(before.gait, before.settings.duration())),
                 heading=0.0)  # and turned back to the yaw the robot lay in
         except UnreachablePlanError as error:
             raise WalkSettingsError(f"the feet cannot be re-placed for {after.phase}: "
@@ -192,9 +189,9 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
     return phases, path
 
 
-def _sway(gait: CrawlGait, time: float) -> np.ndarray:
-    """The planned sway (2,) [m] of ``gait`` at gait ``time`` [s] (its travel taken out)."""
-    return body_positions(gait, np.array([time]))[0] - gait.speed * time * gait.direction
+def _sway_at(gait: CrawlGait, time: float) -> np.ndarray:
+    """The planned sway (2,) [m] of ``gait`` at gait ``time`` [s]."""
+    return body_sway(gait, np.array([time]))[0]
 
 
 def waypoint_outcome(recording: dict[str, np.ndarray], summary: dict[str, Any],
@@ -221,8 +218,8 @@ def waypoint_outcome(recording: dict[str, np.ndarray], summary: dict[str, Any],
         first = int(np.searchsorted(times, start))
         last = int(np.searchsorted(times, start + duration, side="right")) - 1
         if origin is None:
-            origin = thorax[first] - _sway(leg.gait, 0.0)
-        reached = thorax[last] - _sway(leg.gait, duration) - origin
+            origin = thorax[first] - _sway_at(leg.gait, 0.0)
+        reached = thorax[last] - _sway_at(leg.gait, duration) - origin
         judged = walking_outcome(recording, summary, leg.settings, simulation.robot,
                                  phase=leg.phase)
         stride = leg.settings.speed * leg.settings.duty_factor * leg.settings.period
