@@ -178,9 +178,7 @@ def run_walk(
     if stopped is not None and stopped["phase"] == "walk":
         outcome = {"success": False, "reasons": [stopped["reason"]], "stance": stance,
                    "period [s]": settings.period}
-        RunFolderWriter(folder).update_summary({"walking": outcome})
-        run.summary["walking"] = outcome
-        return JudgedWalk(run, plan, outcome, None)
+        return JudgedWalk(run, plan, _recorded(run, outcome), None)
     if run.interrupted or "walk" not in run.summary["phases"]:
         return JudgedWalk(run, plan, None, None)
     with clock.stage("walk judgement"):
@@ -194,9 +192,7 @@ def run_walk(
     with clock.stage("plots"):
         figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
                               figure_title or f"{verb} {where}")
-    RunFolderWriter(folder).update_summary({"walking": outcome})
-    run.summary["walking"] = outcome
-    return JudgedWalk(run, plan, outcome, figure)
+    return JudgedWalk(run, plan, _recorded(run, outcome), figure)
 
 
 def run_waypoints(
@@ -226,7 +222,8 @@ def run_waypoints(
     check_walk_settings(settings)
     with clock.stage("walk plan"):
         phases, path = waypoint_phases(simulation, settings, waypoints)
-        check_supply(simulation, leg_posture(path[0].plan.references[0]), walking=True)
+        for leg in path:  # each walk of the path in its own posture
+            check_supply(simulation, leg_posture(leg.plan.references[0]), walking=True)
     robot = simulation.robot
     folder = create_run_folder(output, f"waypoints-{robot.environment}")
     description = (f"quadruped: walk through {len(path)} waypoints on {robot.environment}")
@@ -237,10 +234,8 @@ def run_waypoints(
         outcome = None if stopped is None else {
             "success": False, "reasons": [f"{stopped['phase']}: {stopped['reason']}"],
             "legs": []}
-        if outcome is not None:
-            RunFolderWriter(folder).update_summary({"walking": outcome})
-            run.summary["walking"] = outcome
-        return JudgedWalk(run, path[0].plan, outcome, None)
+        return JudgedWalk(run, path[0].plan,
+                          None if outcome is None else _recorded(run, outcome), None)
     with clock.stage("walk judgement"):
         outcome = waypoint_outcome(run.recording, run.summary, simulation, path)
         stopped = run.summary.get("stopped before")
@@ -258,6 +253,11 @@ def run_waypoints(
         figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
                               f"walk through {len(path)} waypoints")
         waypoint_path_figure(run.recording, path, outcome, folder / WAYPOINTS_FIGURE)
-    RunFolderWriter(folder).update_summary({"walking": outcome})
+    return JudgedWalk(run, path[0].plan, _recorded(run, outcome), figure)
+
+
+def _recorded(run: RobotRun, outcome: dict[str, Any]) -> dict[str, Any]:
+    """``outcome``, added to the run's summary (``"walking"``) and to its folder's."""
+    RunFolderWriter(run.folder).update_summary({"walking": outcome})
     run.summary["walking"] = outcome
-    return JudgedWalk(run, path[0].plan, outcome, figure)
+    return outcome
