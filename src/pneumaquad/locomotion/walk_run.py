@@ -22,7 +22,7 @@ import numpy as np
 
 from pneumaquad.io.run_folder import RunFolderWriter, create_run_folder
 from pneumaquad.io.stage_clock import StageClock
-from pneumaquad.reporting.robot_plots import plot_walking
+from pneumaquad.reporting.robot_plots import plot_walking, plot_waypoints
 from pneumaquad.robot.experiment import Phase, RobotRun, run_phases
 from pneumaquad.robot.simulation import RobotSimulation
 
@@ -44,7 +44,7 @@ from .walking import (
     walking_outcome,
     walking_phases,
 )
-from .waypoints import waypoint_outcome, waypoint_path_figure, waypoint_phases
+from .waypoints import waypoint_outcome, waypoint_phases
 
 __all__ = ["GAIT_FIELDS", "REACH_FIELDS", "WALKING_FIGURE", "WALK_SETTINGS",
            "WAYPOINTS_FIGURE", "JudgedWalk", "WalkSettingsError", "check_walk_settings",
@@ -252,7 +252,9 @@ def run_waypoints(
     with clock.stage("plots"):
         figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
                               f"walk through {len(path)} waypoints")
-        waypoint_path_figure(run.recording, path, outcome, folder / WAYPOINTS_FIGURE)
+        plot_waypoints(run.recording, np.array([leg.target for leg in path]),
+                       np.array([judged["reached [m]"] for judged in outcome["legs"]]),
+                       np.array(outcome["start [m]"] or [0.0, 0.0]), folder / WAYPOINTS_FIGURE)
     return JudgedWalk(run, path[0].plan, _recorded(run, outcome), figure)
 
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -236,28 +235,3 @@ def waypoint_outcome(recording: dict[str, np.ndarray], summary: dict[str, Any],
     return {"success": not reasons, "reasons": reasons or ["reached every waypoint"],
             "legs": legs, "start [m]": [] if origin is None else origin.tolist(),
             "final waypoint error [m]": legs[-1]["waypoint error [m]"] if legs else math.nan}
-
-
-def waypoint_path_figure(recording: dict[str, np.ndarray], path: list[PathLeg],
-                         outcome: dict[str, Any], output: Path) -> Path:
-    """The thorax's path over the ground with the waypoints and where each walk ended."""
-    import matplotlib.pyplot as plt
-
-    figure, axes = plt.subplots(figsize=(6.0, 6.0))
-    axes.plot(recording["thorax x [m]"], recording["thorax y [m]"], "C0", lw=0.8,
-              label="thorax (with its sway)")
-    origin = np.array(outcome["start [m]"]) if outcome["start [m]"] else np.zeros(2)
-    targets = origin + np.array([[0.0, 0.0]] + [leg.target.tolist() for leg in path])
-    axes.plot(targets[:, 0], targets[:, 1], "k--o", ms=5, label="waypoints")
-    for number, judged in enumerate(outcome["legs"]):
-        reached = origin + np.array(judged["reached [m]"])
-        axes.plot(*reached, "C3x", ms=9, label="where a walk ended" if number == 0 else None)
-    axes.set_xlabel("x [m]")
-    axes.set_ylabel("y [m]")
-    axes.set_aspect("equal", adjustable="datalim")
-    axes.legend(loc="best")
-    axes.set_title("Waypoint walk: path, waypoints, where each walk ended (x)")
-    figure.tight_layout()
-    figure.savefig(output, dpi=120)
-    plt.close(figure)
-    return output

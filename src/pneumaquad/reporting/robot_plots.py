@@ -118,6 +118,28 @@ def plot_walking(recording: dict[str, np.ndarray], legs: Sequence[str], path: Pa
 MARGIN_AXIS = (-0.2, 0.15, 0.01)
 
 
+def plot_waypoints(recording: dict[str, np.ndarray], waypoints: np.ndarray,
+                   reached: np.ndarray, start: np.ndarray, path: Path,
+                   units: DisplayUnits = SI) -> Path:
+    """A waypoint walk over the ground: the thorax's path (with its sway), the waypoints
+    (n, 2) [m] and where each walk ended, ``reached`` (m, 2) [m], both from ``start``
+    (2,) [m, world]."""
+    fig, axis = plt.subplots(figsize=(6.0, 6.0))
+    axis.plot(units.value(recording["thorax x [m]"], "length"),
+              units.value(recording["thorax y [m]"], "length"), "C0", lw=0.8,
+              label="thorax (with its sway)")
+    targets = start + np.vstack([np.zeros(2), waypoints])
+    axis.plot(units.value(targets[:, 0], "length"), units.value(targets[:, 1], "length"),
+              "k--o", ms=5, label="waypoints")
+    ends = start + np.asarray(reached, dtype=float).reshape(-1, 2)
+    axis.plot(units.value(ends[:, 0], "length"), units.value(ends[:, 1], "length"), "C3x",
+              ms=9, ls="none", label="where a walk ended")
+    axis.set_xlabel(units.axis("x", "length"))
+    axis.set_ylabel(units.axis("y", "length"))
+    axis.set_aspect("equal", adjustable="datalim")
+    return _save(fig, [axis], path, "Waypoint walk: path, waypoints, where each walk ended")
+
+
 def _save(fig, axes, path: Path, title: str) -> Path:
     for axis in axes:
         axis.grid(True, alpha=0.35)
