@@ -555,11 +555,11 @@ def robot_walk(
                         run_waypoints(simulation, settings, points, output,
                                       progress=_progress(update), clock=clock, **hooks))
         except WalkSettingsError as error:  # out of range, or a gait that cannot be planned
+            hints = ["--waypoints"] if "waypoints" in error.fields else []
             fields = tuple(field for field in error.fields if field != "waypoints")
-            hint = ", ".join(filter(None, ["--waypoints" if "waypoints" in error.fields
-                                           else "", option_names(WALK_SETTINGS, fields)
-                                           if fields else ""]))
-            raise typer.BadParameter(str(error), param_hint=hint) from None
+            if fields:
+                hints.append(option_names(WALK_SETTINGS, fields))
+            raise typer.BadParameter(str(error), param_hint=", ".join(hints)) from None
         except InsufficientSupplyError as error:
             raise typer.BadParameter(str(error), param_hint=SUPPLY_HINT) from None
         _report(simulation, walk.run, walk.run.summary["description"], worker, video, clock,
