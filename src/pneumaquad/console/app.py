@@ -227,10 +227,9 @@ class ConsoleApp:
                                                if leg not in placed})
                 if self.devices is not None:
                     self.walking.place_front_feet(self.devices.take_placements())
-            self.walking.before_chunk(count * self.simulation.control_step)
             self._last_good = self.simulation.snapshot(self._last_good)
             try:
-                self.simulation.step(count)
+                self.walking.step(count)
             except SimulationDivergedError as error:
                 # the safe state: paused at the last good state, the divergence shown
                 self.simulation.restore(self._last_good)

@@ -1,42 +1,48 @@
-"""Walking in the console: the online crawl (:mod:`pneumaquad.gait.online`) on the live robot.
+"""Walking in the console: the command line's walk driven live, and shared control.
 
 Modes:
 
 ``off``        the legs hold their references (the styluses drive the front feet);
-``automatic``  the crawl walks at the commanded body speed and heading (GUI sliders or
-               the keyboard of the terminal running the console, :mod:`.keyboard`);
+``automatic``  the walk of ``pneumaquad robot walk``
+               (:class:`pneumaquad.locomotion.live_walk.LiveWalk`: the same crawl,
+               settings, feedback and verified start) at the commanded body speed and
+               heading (GUI sliders or the keyboard of the terminal running the console,
+               :mod:`.keyboard`); a new command takes effect at the end of the gait
+               cycle in progress, the feet re-placed between two walks;
 ``shared``     the operator places the front feet with the styluses (gizmos or UDP
                devices): a front foot's foothold is its stylus target on the ground; the
-               rear legs follow their front legs and the body follows the feet.
+               rear legs follow their front legs and the body follows the feet. The
+               footholds are the operator's, chosen one step at a time, so this mode
+               plans step by step (:class:`pneumaquad.gait.online.OnlineCrawl`, a
+               discontinuous crawl with the same step height and planned margin,
+               :class:`pneumaquad.gait.settings.CrawlSettings`).
 
-Before each chunk, :meth:`ConsoleWalking.before_chunk` advances the crawl by the chunk's
-duration, refusing a lift that the *measured* state would not support
+In shared control, before each chunk :meth:`ConsoleWalking.before_chunk` advances the
+crawl by the chunk's duration, refusing a lift that the *measured* state would not support
 (:func:`pneumaquad.gait.crawl.refuse_lift` with the measured feet of the legs the crawl
 has on the ground and the whole robot's measured centre of mass), commands all twelve
-joints through the leg IK (clamped into the limits) and, like the CLI walk, sets the
-stance legs' cylinders to carry their statics share of the weight
+joints through the leg IK (clamped into the limits) and, like the command line's walk,
+sets the stance legs' cylinders to carry their statics share of the weight
 (:func:`pneumaquad.locomotion.stance_control.track_stance_loads` with the crawl's
-:meth:`~pneumaquad.gait.online.OnlineCrawl.load_shares`: a leg sheds its load before it
-lifts). The feet are planned in the *walking frame*: world axes turned by the thorax's
-yaw when walking began. The body is commanded to keep that yaw: the feet's targets relative
-to the planned body are given to the legs in that frame, not in the measured one, so a body
-that has turned has its stance feet (held by the ground) commanded where they would be
-without the turn, and the legs' joint controllers turn it back. Turning the targets with the
-measured yaw instead (as this module did before) leaves nothing that restores the heading:
-walking straight ahead for 30 s, the body turned by 30–43°.
+:meth:`~pneumaquad.gait.online.OnlineCrawl.load_shares`). Its feet are planned in the
+*walking frame*: world axes turned by the thorax's yaw when walking began, and given to
+the legs in that frame, so a body that has turned is turned back by the legs.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from pneumaquad.gait.crawl import LEGS, refuse_lift
 from pneumaquad.gait.online import OnlineCrawl, OnlineCrawlSettings
 from pneumaquad.gait.stability import centre_of_mass
+from pneumaquad.locomotion.live_walk import LiveWalk
 from pneumaquad.locomotion.stance_control import StanceControlSettings, track_stance_loads
 from pneumaquad.locomotion.walk import standing_feet, thorax_rotation
+from pneumaquad.locomotion.walk_settings import WalkSettings
 from pneumaquad.locomotion.walking import WALKING_ANGLES
 from pneumaquad.robot.kinematics import DHTable, foot_jacobian, forward_kinematics_dh
 from pneumaquad.robot.leg_ik import exact_solutions
@@ -85,17 +91,24 @@ class ConsoleWalking:
     simulation : RobotSimulation
         A free quadruped (other configurations cannot walk: the mode stays ``off``).
     settings : OnlineCrawlSettings, optional
+        The shared-control crawl's.
     stance : StanceControlSettings or None, optional
         Force-controlled stance while walking (the CLI walk's default); None: plain
         position control of every leg.
+    walk : WalkSettings, optional
+        The automatic walk's (the defaults of ``robot walk``; its stance is ``stance``).
     """
 
     def __init__(self, simulation: RobotSimulation,
                  settings: OnlineCrawlSettings | None = None,
-                 stance: StanceControlSettings | None = DEFAULT_STANCE) -> None:
+                 stance: StanceControlSettings | None = DEFAULT_STANCE,
+                 walk: WalkSettings | None = None) -> None:
         self.simulation = simulation
         self.settings = settings or OnlineCrawlSettings()
         self.stance = stance
+        self.walk_settings = replace(walk or WalkSettings(), stance_control=stance)
+        #: The automatic walk (automatic mode only).
+        self.live: LiveWalk | None = None
         robot = simulation.robot
         self.available = robot.free and tuple(robot.legs) == LEGS
         self.mode = "off"
@@ -110,18 +123,20 @@ class ConsoleWalking:
             self.to_thorax = thorax_rotation(robot).T  # body → thorax frame
 
     def set_mode(self, mode: str) -> None:
-        """Switch mode; walking starts from the feet's present neutral footholds."""
+        """Switch mode; walking starts from where the feet stand (automatic: the present
+        pose is the standing pose it walks from and returns to)."""
         if mode not in WALKING_MODES:
             raise ValueError(f"walking mode {mode!r}: expected one of {WALKING_MODES}")
         if mode != "off" and not self.available:
             self.message = "walking needs the free quadruped configuration"
             mode = "off"
-        self.mode = mode
-        if mode == "off":
-            self.crawl = None
+        if mode != self.mode:
+            self.crawl = self.live = None
             self.simulation.stop_force_tracking()
-            return
-        if self.crawl is None:
+        self.mode = mode
+        if mode == "automatic" and self.live is None:
+            self.live = LiveWalk(self.simulation, self.walk_settings)
+        if mode == "shared" and self.crawl is None:
             simulation = self.simulation
             robot = simulation.robot
             neutral = standing_feet(robot, WALKING_ANGLES)
@@ -132,8 +147,9 @@ class ConsoleWalking:
             com = self._in_frame(centre_of_mass(simulation.model, simulation.data)) - thorax
             feet = self._in_frame(simulation.foot_positions())
             self.crawl = OnlineCrawl(neutral, com, thorax, self.settings, footholds=feet)
-        self.crawl.shared = mode == "shared"
-        self.command(self.speed, self.heading)
+            self.crawl.shared = True
+        if mode != "off":
+            self.command(self.speed, self.heading)
 
     def command(self, speed: float, heading: float) -> None:
         """Body speed [m/s] (clipped to ±:data:`MAX_SPEED`) and heading [rad] (automatic)."""
@@ -141,6 +157,8 @@ class ConsoleWalking:
         self.heading = float(heading)
         if self.crawl is not None:
             self.crawl.command_velocity(self.speed, self.heading)
+        if self.live is not None:
+            self.live.command(self.speed, self.heading)
 
     def _in_frame(self, points: np.ndarray) -> np.ndarray:
         """xy [m] in the walking frame of world points (..., ≥2) [m]."""
@@ -166,8 +184,24 @@ class ConsoleWalking:
     def _yaw(self) -> float:
         return float(thorax_attitude(self.simulation)[2])
 
+    @property
+    def steps_taken(self) -> int:
+        """Feet lifted since the walking mode began."""
+        if self.live is not None:
+            return self.live.steps_taken()
+        return 0 if self.crawl is None else self.crawl.steps_taken
+
+    def step(self, count: int) -> None:
+        """Advance the simulation ``count`` control steps, walking as the mode asks."""
+        if self.live is not None:
+            self.live.step(count)
+            return
+        self.before_chunk(count * self.simulation.control_step)
+        self.simulation.step(count)
+
     def before_chunk(self, interval: float) -> None:
-        """Advance the crawl by ``interval`` [s] and command the joints for the chunk."""
+        """Shared control: advance the crawl by ``interval`` [s] and command the joints
+        for the chunk."""
         crawl = self.crawl
         if crawl is None:
             return
@@ -191,18 +225,27 @@ class ConsoleWalking:
                                self.stance.stiffness)
 
     def status(self) -> str:
-        """Markdown lines: mode, next leg and phase, planned margin, refusal, steps."""
+        """Markdown lines: mode, command, what the walk is doing, planned margin, steps,
+        ⚠ a refused lift or a walk that could not go on."""
         if self.message and self.mode == "off":
             return self.message
-        if self.crawl is None:
+        if self.crawl is None and self.live is None:
             return f"mode **{self.mode}**"
+        lines = [f"mode **{self.mode}**, speed {1000 * self.speed:.0f} mm/s, heading "
+                 f"{math.degrees(self.heading):.0f}°"]
+        if self.live is not None:
+            live = self.live
+            doing = live.phase_name or "standing"
+            margin = live.planned_margin()
+            lines.append(f"{doing}" + ("" if math.isnan(margin) else
+                                       f", planned margin {1000 * margin:.0f} mm")
+                         + f", steps {live.steps_taken()}")
+            if live.message:
+                lines.append(f"⚠ {live.message}")
+            return "  \n".join(lines)
         crawl = self.crawl
-        lines = [
-            f"mode **{self.mode}**, speed {1000 * self.speed:.0f} mm/s, heading "
-            f"{math.degrees(self.heading):.0f}°",
-            f"{crawl.phase} ({crawl.leg}), planned margin {1000 * crawl.margin():.0f} mm, "
-            f"steps {crawl.steps_taken}",
-        ]
+        lines.append(f"{crawl.phase} ({crawl.leg}), planned margin "
+                     f"{1000 * crawl.margin():.0f} mm, steps {crawl.steps_taken}")
         if crawl.refusal:
             lines.append(f"⚠ {crawl.refusal}")
         return "  \n".join(lines)

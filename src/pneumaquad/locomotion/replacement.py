@@ -32,7 +32,8 @@ from pneumaquad.robot.stand_up import smooth_ramp
 from .reach import UnreachablePlanError
 from .walk import thorax_rotation
 
-__all__ = ["REPLACEMENT_MARGIN", "STEP_TIME", "SWAY_TIME", "replacement_phases"]
+__all__ = ["REPLACEMENT_MARGIN", "STEP_TIME", "SWAY_TIME", "foothold_moves",
+           "replacement_phases"]
 
 Array = NDArray[np.float64]
 
@@ -53,6 +54,21 @@ def _feet(tables: list, pose: Array) -> Array:
     """Feet (legs, 3) [m] in the thorax frame of a pose (joints,) [rad]."""
     return np.array([thorax_frame_points(table, pose[3 * k: 3 * k + 3])
                      for k, table in enumerate(tables)])
+
+
+def foothold_moves(simulation: RobotSimulation, start_pose: Array, end_pose: Array,
+                   body_move: Array | None = None) -> Array:
+    """How far (legs,) [m] each foot moves on the ground from its place in ``start_pose``
+    to its place in ``end_pose`` (joints,) [rad] with the body moved by ``body_move`` (2,)
+    [m, body frame x, y] (the horizontal distance; all 0: the body alone moves)."""
+    robot = simulation.robot
+    tables = [leg_dh_table(robot, leg) for leg in robot.legs]
+    to_body = thorax_rotation(robot)
+    before = _feet(tables, np.asarray(start_pose, float)) @ to_body.T
+    after = _feet(tables, np.asarray(end_pose, float)) @ to_body.T
+    if body_move is not None:
+        after[:, :2] += np.asarray(body_move, dtype=float)
+    return np.hypot(*(after[:, :2] - before[:, :2]).T)
 
 
 def _pose(tables: list, feet: Array, near: Array) -> Array:

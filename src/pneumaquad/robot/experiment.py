@@ -36,7 +36,7 @@ from .coupling import MODE_CLOSED_LOOP, MODE_OPEN_LOOP, MODE_UNCOMMANDED
 from .recording import fill_recording_row, recording_columns
 from .simulation import RobotSimulation, SimulationDivergedError
 
-__all__ = ["Phase", "RobotRun", "run_phases", "tank_endurance"]
+__all__ = ["Phase", "RobotRun", "reference_table", "run_phases", "tank_endurance"]
 
 ReferenceFunction = Callable[[np.ndarray], np.ndarray]
 
@@ -115,7 +115,11 @@ def tank_endurance(simulation: RobotSimulation, mean_flow: float) -> float:
     return usable / mean_flow
 
 
-def _reference_table(phase: Phase, start: float, steps: int, step: float, count: int):
+def reference_table(phase: Phase, start: float, steps: int, step: float,
+                    count: int) -> np.ndarray:
+    """The references (steps, count) [rad] of ``phase`` for the ``steps`` control steps
+    of ``step`` [s] after simulation time ``start`` [s] (a reference function called
+    with those times, or the phase's constant references repeated)."""
     times = start + step * np.arange(1, steps + 1)
     if callable(phase.references):
         table = np.asarray(phase.references(times), dtype=float)
@@ -202,7 +206,7 @@ def run_phases(
                 steps = round(phase.duration / dt)
                 if not phase.feedback:
                     begun = time.perf_counter()
-                    table = _reference_table(phase, simulation.time, steps, dt, count)
+                    table = reference_table(phase, simulation.time, steps, dt, count)
                     reference_seconds += time.perf_counter() - begun
                 simulation.joint_control["mode"] = modes
                 simulation.stop_force_tracking()  # a feedback phase may track forces
@@ -215,7 +219,7 @@ def run_phases(
                     chunk = min(every, steps - done)
                     begun = time.perf_counter()
                     if phase.feedback:
-                        rows = _reference_table(phase, simulation.time, chunk, dt, count)
+                        rows = reference_table(phase, simulation.time, chunk, dt, count)
                         fed = time.perf_counter()
                         feedback_seconds += fed - begun
                         simulation.step(chunk, rows, 0)
