@@ -1,22 +1,25 @@
-"""Measure the console's automatic online crawl (docs/console.md, "Walking").
+"""Measure the console's automatic walking (docs/console.md, "Walking").
 
 Drives :class:`pneumaquad.console.app.ConsoleApp` headless and unpaced (no browser): the
 free quadruped on flat ground from the console's reset pose, 0.5 s to settle, then the
-automatic walking mode (straight ahead unless ``--heading``) for ``--duration`` seconds, one 20 ms
-chunk at a time as the console's thread steps it. After every chunk it reads what the
-console shows: the loaded-feet static stability margin (feet with a normal force above
-1 N) and the thorax pose.
+automatic walking mode (straight ahead unless ``--heading``): the command line's walk
+(:class:`pneumaquad.locomotion.live_walk.LiveWalk`), which first moves the robot into
+the walk's first pose (a shift of the body, or the feet re-placed for a sideways
+posture), then walks; ``--duration`` seconds of walking are measured from the walk's
+start, one 20 ms chunk at a time as the console's thread steps it. After every chunk it
+reads what the console shows: the loaded-feet static stability margin (feet with a
+normal force above 1 N) and the thorax pose.
 
     .venv/bin/python docs/examples/console_walk.py --speed 15 --speed 30
     .venv/bin/python docs/examples/console_walk.py --speed 15 --stance position
     .venv/bin/python docs/examples/console_walk.py --speed 15 --heading 90
 
-Prints per run: the thorax's straight-line distance, its travel along the heading and its
-forward (x) and sideways (y) travel, the largest |yaw| and the final yaw, steps taken,
-chunks with a refused lift, the mean and lowest thorax height, the fraction of chunks whose
-loaded-feet margin is negative
-(and those with no loaded foot), whether the thorax fell below 0.25 m, and the wall time
-spent in the console's chunks (stepping and refreshing the scene and panels, as the
+Prints per run: the time from the command to the walk's start, the body's travel along
+the heading and its forward (x) and sideways (y) travel (the thorax, the walk's planned
+sway taken out), the largest |yaw| and the final yaw, steps taken, the mean and lowest
+thorax height, the fraction of chunks whose loaded-feet margin is negative (and those
+with no loaded foot), whether the thorax fell below 0.25 m, and the wall time spent in
+the console's chunks while walking (stepping and refreshing the scene and panels, as the
 unpaced console's thread does).
 
 The margin is the one the console shows (``app.stability``, from ``foot_normal_forces()``
@@ -51,10 +54,22 @@ def walk(speed: float, duration: float, stance: str, heading: float = 0.0
         thorax = simulation.robot.thorax_id
         for _ in range(SETTLE_CHUNKS):
             app.advance()
-        start = simulation.data.xpos[thorax].copy()
+        commanded = simulation.time
         app.set_walking("automatic", speed=speed, heading=heading)
+        live = app.walking.live
+        while not live.walking and not app.message and simulation.time < commanded + 60.0:
+            app.advance()
+        walking = live.current_walk
+        if walking is None:
+            return {"message": app.message or live.message or "the walk did not begin"}
+        began = simulation.time
+
+        def body() -> np.ndarray:
+            return simulation.data.xpos[thorax][:2] - walking.sway(simulation.time)
+
+        start = body()
         chunks = round(duration / (app.chunk_steps * simulation.control_step))
-        margins, yaws, heights, refusals = [], [], [], 0
+        margins, yaws, heights = [], [], []
         wall = 0.0
         for _ in range(chunks):
             clock = time.perf_counter()
@@ -65,28 +80,25 @@ def walk(speed: float, duration: float, stance: str, heading: float = 0.0
             margins.append(app.stability.margin)
             yaws.append(thorax_attitude(simulation)[2])
             heights.append(simulation.data.xpos[thorax][2])
-            refusals += bool(app.walking.crawl.refusal)
-        end = simulation.data.xpos[thorax]
+        moved = body() - start
         margins = np.asarray(margins)
         yaws = np.degrees(np.asarray(yaws))
         return {
-            "simulated [s]": len(margins) * app.chunk_steps * simulation.control_step,
-            "straight-line distance [m]": float(np.hypot(*(end[:2] - start[:2]))),
-            "along the heading [m]": float((end[:2] - start[:2])
-                                           @ [math.cos(heading), math.sin(heading)]),
-            "forward x [m]": end[0] - start[0],
-            "sideways y [m]": end[1] - start[1],
+            "command to the walk's start [s]": began - commanded,
+            "walked [s]": len(margins) * app.chunk_steps * simulation.control_step,
+            "along the heading [m]": float(moved @ [math.cos(heading), math.sin(heading)]),
+            "forward x [m]": moved[0],
+            "sideways y [m]": moved[1],
             "max |yaw| [deg]": float(np.max(np.abs(yaws))),
             "final yaw [deg]": float(yaws[-1]),
-            "steps": app.walking.crawl.steps_taken,
-            "chunks with a refused lift": refusals,
+            "steps": app.walking.steps_taken,
             "mean thorax height [m]": float(np.mean(heights)),
             "min thorax height [m]": float(np.min(heights)),
             "loaded-feet margin < 0 [%]": 100.0 * float(np.mean(margins < 0.0)),
             "no loaded foot [%]": 100.0 * float(np.mean(np.isnan(margins))),
             "fell": float(np.min(heights) < FALLEN_HEIGHT),
             "wall time of the console's chunks [s]": wall,
-            "message": app.message,
+            "message": app.message or live.message,
         }
     finally:
         app.close()
@@ -100,7 +112,7 @@ def main() -> None:
         action="append",
         help="commanded body speed [mm/s], repeatable (default 15 and 30)",
     )
-    parser.add_argument("--duration", type=float, default=30.0, help="walking time [s]")
+    parser.add_argument("--duration", type=float, default=30.0, help="walking time measured [s]")
     parser.add_argument("--heading", type=float, default=0.0,
                         help="walking direction [deg], counter-clockwise from forward")
     parser.add_argument(
