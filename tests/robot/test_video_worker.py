@@ -305,6 +305,7 @@ def test_stop_needs_the_folder_from_finish() -> None:
 
 
 def test_ctrl_c_after_a_run_is_counted_and_raised_where_checked() -> None:
+    before = signal.getsignal(signal.SIGINT)  # SIG_IGN where started in the background
     with counted_interrupts() as ctrl_c:
         os.kill(os.getpid(), signal.SIGINT)
         os.kill(os.getpid(), signal.SIGINT)
@@ -313,7 +314,7 @@ def test_ctrl_c_after_a_run_is_counted_and_raised_where_checked() -> None:
             with pytest.raises(KeyboardInterrupt):
                 ctrl_c.check()
         ctrl_c.check()  # each press raised once
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal.getsignal(signal.SIGINT) is before  # the handler put back
 
 
 def test_a_diverged_run_keeps_the_video_of_the_part_that_ran(tmp_path: Path) -> None:
