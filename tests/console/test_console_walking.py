@@ -100,10 +100,14 @@ def test_a_new_command_waits_for_the_cycle_and_stop_stands_in_place(app: Console
     for _ in range(100):
         app.advance()
     assert np.linalg.norm(_thorax(app)[:2] - still[:2]) < 0.005  # stands still
+    steps = app.walking.steps_taken
+    assert steps == 4  # one cycle: each foot lifted once
     app.set_walking(speed=0.02)
     assert [entry.phase.name for entry in live.schedule][-1] == "walk 2"
     resumed = live.schedule[-1]
     assert resumed.phase.gate is None and resumed.walk.gait is walk.gait  # no re-placing
+    app.advance()
+    assert app.walking.steps_taken <= steps + 1  # the cycle it resumes from is not counted
     app.set_walking(speed=0.02, heading=np.pi / 2)  # another heading: the feet re-placed
     names = [entry.phase.name for entry in live.schedule]
     assert any(name.startswith("re-place") for name in names) and names[-1] == "walk 3"

@@ -97,8 +97,8 @@ class _Walk:
     def lift_offs(self) -> Array:
         """Simulation times [s] of the plan's lift-offs."""
         stance = self.plan.stance
-        lifting = np.any(stance[:-1] & ~stance[1:], axis=1)
-        return self.start + self.plan.times[1:][lifting]
+        before = np.vstack([np.ones_like(stance[:1]), stance[:-1]])  # four feet down before
+        return self.start + self.plan.times[np.any(before & ~stance, axis=1)]
 
     def index(self, time: float) -> int:
         """The plan's row at simulation ``time`` [s] (clipped into the plan)."""
@@ -117,12 +117,11 @@ class _Walk:
 @dataclass
 class _Rest:
     """Where the schedule leaves the robot: its pose [rad], its body's sway from the
-    stance's centre [m, body frame], its centre of mass (body frame) [m], and the walk
-    (and that walk's time [s]) it stands in, if any."""
+    stance's centre [m, body frame], and the walk (and that walk's time [s]) it stands
+    in, if any."""
 
     pose: Array
     sway: Array = field(default_factory=lambda: np.zeros(2))
-    centre: Array = field(default_factory=lambda: np.zeros(2))
     walk: _Walk | None = None
     walk_time: float = 0.0
 
@@ -179,7 +178,7 @@ class LiveWalk:
             cut = min(cut, current.end)
             current.phase.duration = cut - current.start
             self.schedule = self.schedule[: self.schedule.index(current) + 1]
-            self.rest = _Rest(walk.pose(cut), walk.sway(cut), walk.gait.com_offset, walk,
+            self.rest = _Rest(walk.pose(cut), walk.sway(cut), walk,
                               cut - walk.start)
             self._extend(cut)
         # in a transition, the walk it leads to is checked against the command when it
@@ -204,11 +203,16 @@ class LiveWalk:
         return None if current is None else current.walk
 
     def steps_taken(self) -> int:
-        """Feet lifted so far, every walk of the schedule counted."""
+        """Feet lifted so far, every walk of the schedule counted (each over the time it
+        runs: a resumed walk from where it resumed, a cut one up to its cut)."""
         now = self.simulation.time
-        return sum(int(np.count_nonzero(entry.walk.lift_offs <= now))
-                   for entry in self.schedule if entry.walk is not None
-                   and entry.start <= now) + self._steps_before
+        lifted = 0
+        for entry in self.schedule:
+            if entry.walk is not None and entry.start <= now:
+                lifts = entry.walk.lift_offs
+                lifted += int(np.count_nonzero((lifts >= entry.start)
+                                               & (lifts < min(now, entry.end))))
+        return lifted + self._steps_before
 
     def planned_stance(self) -> NDArray[np.bool_] | None:
         """(legs,) the feet the walk running now holds down; None when not walking."""
@@ -264,7 +268,7 @@ class LiveWalk:
         self.schedule.append(_Scheduled(begin, phase, walk))
         self.walks += 1
         end = begin + phase.duration
-        self.rest = _Rest(walk.pose(end), walk.sway(end), gait.com_offset, walk,
+        self.rest = _Rest(walk.pose(end), walk.sway(end), walk,
                           end - start)
 
     def _plan(self) -> tuple[WalkSettings, CrawlGait, WalkPlan]:
@@ -313,7 +317,7 @@ class LiveWalk:
             self.schedule.append(_Scheduled(begin, phase))
             begin += phase.duration
         self.rest = _Rest(np.asarray(end_pose, dtype=float).copy(),
-                          np.asarray(body_sway_after, dtype=float).copy(), gait.com_offset)
+                          np.asarray(body_sway_after, dtype=float).copy())
         return begin
 
     # --- stepping --------------------------------------------------------------------
@@ -381,7 +385,7 @@ class LiveWalk:
             if reason is not None:  # stand in the walk's first pose, or walk on
                 self.schedule = self.schedule[: self.schedule.index(entry)]
                 self.rest = _Rest(walk.plan.references[0], walk.sway(walk.start),
-                                  walk.gait.com_offset, walk, 0.0)
+                                  walk, 0.0)
                 self._extend(simulation.time)
                 entry = self._current(simulation.time)
                 if entry is None:
