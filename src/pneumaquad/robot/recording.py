@@ -12,10 +12,10 @@ ground), the static stability margin of a crawl gait.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import NamedTuple
 
-import mujoco
 import numpy as np
 
 from pneumaquad.gait.stability import loaded_support
@@ -159,15 +159,11 @@ def thorax_attitude(simulation: RobotSimulation) -> np.ndarray:
     The nominal placement (thesis main.cpp: thorax axis forward, along world x) has all
     three zero; the angles are Z-Y-X Euler angles of the rotation from it, in the world.
     """
-    robot = simulation.robot
-    rotation = simulation.data.xmat[robot.thorax_id].reshape(3, 3)
-    nominal = simulation.model.body_quat[robot.thorax_id]
-    nominal_matrix = np.zeros(9)
-    mujoco.mju_quat2Mat(nominal_matrix, nominal)
-    relative = rotation @ nominal_matrix.reshape(3, 3).T
-    yaw = np.arctan2(relative[1, 0], relative[0, 0])
-    pitch = -np.arcsin(np.clip(relative[2, 0], -1.0, 1.0))
-    roll = np.arctan2(relative[2, 1], relative[2, 2])
+    rotation = simulation.data.xmat[simulation.robot.thorax_id].reshape(3, 3)
+    relative = rotation @ simulation.thorax_placement.T
+    yaw = math.atan2(relative[1, 0], relative[0, 0])
+    pitch = -math.asin(min(max(relative[2, 0], -1.0), 1.0))
+    roll = math.atan2(relative[2, 1], relative[2, 2])
     return np.array([roll, pitch, yaw])
 
 

@@ -177,6 +177,11 @@ class RobotSimulation:
             self.gain_schedule = stance_swing_schedule(
                 controller.stance_gain_scale, controller.swing_gain_scale
             )
+        placement = np.zeros(9)
+        mujoco.mju_quat2Mat(placement, self.model.body_quat[robot.thorax_id])
+        #: Rotation (3, 3) of the thorax's nominal placement (body frame → world at zero
+        #: attitude, :func:`.recording.thorax_attitude`).
+        self.thorax_placement = placement.reshape(3, 3)
         self.steps_taken = 0
         self.divergences = 0  # runs of step() that stopped on a diverged state
         self.set_pose(np.clip(np.zeros(robot.joint_count), robot.lower_limits(),
