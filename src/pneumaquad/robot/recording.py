@@ -46,6 +46,8 @@ class RowSources(NamedTuple):
     foot_positions: np.ndarray  # (legs, 3) [m]
     foot_forces: np.ndarray  # (legs,) [N]
     attitude: np.ndarray  # thorax roll, pitch, yaw [rad]
+    thorax: np.ndarray  # (3,) thorax position [m]
+    air: float  # air drawn by all cylinders [kg]
 
 
 class Column(NamedTuple):
@@ -72,9 +74,8 @@ def _force_set_point(row: RowSources) -> np.ndarray:
 
 def _normal_litres(row: RowSources) -> float:
     """Air drawn [NL]: its mass at normal conditions (ISO 8778), in litres."""
-    s = row.simulation
-    gas_constant = s.params[0]["gas_constant"]
-    return s.air_consumed() * gas_constant * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
+    gas_constant = row.simulation.params[0]["gas_constant"]
+    return row.air * gas_constant * NORMAL_TEMPERATURE / NORMAL_PRESSURE * 1000.0
 
 
 def _margin(row: RowSources) -> float:
@@ -111,7 +112,7 @@ FOOT_COLUMNS: tuple[Column, ...] = (
 
 
 def _thorax(axis: int) -> Callable[[RowSources], float]:
-    return lambda row: row.simulation.data.xpos[row.simulation.robot.thorax_id][axis]
+    return lambda row: row.thorax[axis]
 
 
 def _attitude(axis: int) -> Callable[[RowSources], float]:
@@ -129,7 +130,7 @@ THORAX_COLUMNS: tuple[Column, ...] = (
 )
 BODY_COLUMNS: tuple[Column, ...] = (
     Column("supply pressure", "Pa", lambda row: row.simulation.supply_pressure()),
-    Column("air consumed", "kg", lambda row: row.simulation.air_consumed()),
+    Column("air consumed", "kg", lambda row: row.air),
     Column("air consumed", "NL", _normal_litres),
     Column("centre of mass x", "m", lambda row: row.simulation.data.subtree_com[0, 0]),
     Column("centre of mass y", "m", lambda row: row.simulation.data.subtree_com[0, 1]),
@@ -186,7 +187,9 @@ def fill_recording_row(simulation: RobotSimulation, reference_angles: np.ndarray
     :func:`recording_columns`, ``row`` as long as it): what :func:`recording_row`
     returns, without a new array, for a row of a preallocated block."""
     sources = RowSources(simulation, reference_angles, simulation.foot_positions(),
-                         simulation.foot_normal_forces(), thorax_attitude(simulation))
+                         simulation.foot_normal_forces(), thorax_attitude(simulation),
+                         simulation.data.xpos[simulation.robot.thorax_id],
+                         simulation.air_consumed())
     joints, legs = simulation.robot.joint_count, len(simulation.robot.legs)
     row[0] = simulation.time
     start = _fill_columns(row, 1, joints, JOINT_COLUMNS, sources)
@@ -199,7 +202,11 @@ def _fill_columns(row: np.ndarray, start: int, count: int, columns: tuple[Column
                   sources: RowSources) -> int:
     """Write a group of columns from ``row[start]`` on: ``count`` entries (joints, legs,
     or 1 for the thorax and body), each with all of ``columns``; the index after it."""
-    block = row[start:start + count * len(columns)].reshape(count, len(columns))
+    end = start + count * len(columns)
+    if count == 1:  # one value a column: written at once
+        row[start:end] = [column.source(sources) for column in columns]
+        return end
+    block = row[start:end].reshape(count, len(columns))
     for index, column in enumerate(columns):
         block[:, index] = column.source(sources)
-    return start + block.size
+    return end
