@@ -132,24 +132,69 @@ def test_shared_walking_places_the_front_foot_at_the_stylus(app: ConsoleApp):
     assert crawl.steps_taken == 1 and crawl.footholds[leg][0] > start[0] + 0.01
 
 
+def test_a_yaw_rate_plans_a_turn_in_place_or_an_arc(app: ConsoleApp):
+    """Speed 0 with a yaw rate plans the command line's turn in place at that rate; a
+    speed with a yaw rate, an arc; the rate is capped at 5°/s, and a command the legs
+    cannot reach is walked at the largest share of it they reach."""
+    import math
+
+    app.set_walking("automatic", speed=0.0, yaw_rate=math.radians(2.0))
+    live = app.walking.live
+    turn = live.schedule[-1].walk.settings
+    assert turn.turning_in_place and turn.body_yaw_rate() == pytest.approx(math.radians(2.0))
+    assert "+2.0°/s" in app.walking.status()
+    app.set_walking("off")
+    app.set_walking("automatic", speed=0.02, yaw_rate=math.radians(9.0))
+    assert app.walking.yaw_rate == pytest.approx(math.radians(5.0))  # capped
+    arc = app.walking.live.schedule[-1].walk.settings
+    assert not arc.turning_in_place
+    # 20 mm/s turning 5°/s is beyond the legs' reach: both scaled down together, and said
+    share = arc.speed / 0.02
+    assert share < 1.0 and arc.yaw_rate == pytest.approx(share * math.radians(5.0))
+    assert f"{share:.0%} of the command" in app.walking.status()
+
+
+@pytest.mark.slow
+def test_turning_in_place_turns_at_the_commanded_rate(app: ConsoleApp):
+    """2°/s in place: after the feet are re-placed into the turn's posture, 16 s of
+    turning turn the body by 32° (±20 %) while it stays within 10 cm of where it stood."""
+    import math
+
+    for _ in range(25):
+        app.advance()
+    app.set_walking("automatic", speed=0.0, yaw_rate=math.radians(2.0))
+    live = app.walking.live
+    while not live.walking:
+        app.advance()
+    yaw, start = _yaw_degrees(app), _thorax(app)
+    for _ in range(800):  # 16 s
+        app.advance()
+    assert _yaw_degrees(app) - yaw == pytest.approx(32.0, rel=0.2)
+    assert np.linalg.norm(_thorax(app)[:2] - start[:2]) < 0.1
+
+
 def test_keys_change_the_walking_command():
     import math
 
     from pneumaquad.console.keyboard import KeyboardControl, key_command
 
-    mode, speed, heading = key_command("m", "off", 0.0, 0.0)
+    mode, speed, heading, rate = key_command("m", "off", 0.0, 0.0)
     assert mode == "automatic"
-    mode, speed, heading = key_command("w", mode, speed, heading)
-    mode, speed, heading = key_command("w", mode, speed, heading)
+    mode, speed, heading, rate = key_command("w", mode, speed, heading, rate)
+    mode, speed, heading, rate = key_command("w", mode, speed, heading, rate)
     assert speed == pytest.approx(0.01)
-    mode, speed, heading = key_command("a", mode, speed, heading)
+    mode, speed, heading, rate = key_command("a", mode, speed, heading, rate)
     assert math.degrees(heading) == pytest.approx(15.0)
-    assert key_command(" ", mode, speed, heading)[1] == 0.0
+    mode, speed, heading, rate = key_command("q", mode, speed, heading, rate)
+    assert math.degrees(rate) == pytest.approx(1.0)
+    assert key_command(" ", mode, speed, heading, rate)[1:4:2] == (0.0, 0.0)
     for _ in range(30):
         speed = key_command("w", mode, speed, heading)[1]
+        rate = key_command("e", mode, speed, heading, rate)[3]
     assert speed == pytest.approx(0.05)  # capped
+    assert math.degrees(rate) == pytest.approx(-5.0)
     with open("/dev/null") as not_a_terminal:
-        assert not KeyboardControl(lambda: (mode, speed, heading), lambda *_: None,
+        assert not KeyboardControl(lambda: (mode, speed, heading, rate), lambda *_: None,
                                    stream=not_a_terminal).active
 
 

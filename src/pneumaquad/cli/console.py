@@ -69,9 +69,10 @@ def serve_console(params: str = "crr-quadruped", configuration: str = "quadruped
     elif start:
         app.start()
     keyboard = KeyboardControl(
-        lambda: (app.walking.mode, app.walking.speed, app.walking.heading),
-        lambda mode, speed, heading: (app.set_walking(mode, speed, heading),
-                                      app.controls.show_walking_command()))
+        lambda: (app.walking.mode, app.walking.speed, app.walking.heading,
+                 app.walking.yaw_rate),
+        lambda mode, speed, heading, yaw_rate: (app.set_walking(mode, speed, heading, yaw_rate),
+                                                app.controls.show_walking_command()))
     if keyboard.active:
         console.print(HELP)
     deadline = None if duration is None else time.monotonic() + duration

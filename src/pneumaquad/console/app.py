@@ -242,21 +242,24 @@ class ConsoleApp:
                 self.devices.send_feedback(self.simulation, self.teleop, self.feedback)
 
     def set_walking(self, mode: str | None = None, speed: float | None = None,
-                    heading: float | None = None) -> None:
-        """Walking mode (off, automatic, shared), body speed [m/s] and heading [rad].
+                    heading: float | None = None, yaw_rate: float | None = None) -> None:
+        """Walking mode (off, automatic, shared), body speed [m/s], heading [rad] and yaw
+        rate [rad/s] (automatic mode).
 
         A walking mode takes all twelve joints (the styluses then only choose the front
         footholds, in shared mode); ``off`` hands the front legs back to the styluses.
         """
         with self.lock:
+            # the command first: a mode that begins walking begins with it
+            if speed is not None or heading is not None or yaw_rate is not None:
+                self.walking.command(self.walking.speed if speed is None else speed,
+                                     self.walking.heading if heading is None else heading,
+                                     yaw_rate)
             if mode is not None:
                 self.walking.set_mode(mode)
                 self.teleop.enabled = self.walking.mode == "off"
                 if self.teleop.enabled:
                     self.teleop.apply_all()
-            if speed is not None or heading is not None:
-                self.walking.command(self.walking.speed if speed is None else speed,
-                                     self.walking.heading if heading is None else heading)
             self.controls.update()
 
     def refresh(self) -> None:

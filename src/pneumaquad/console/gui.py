@@ -20,7 +20,7 @@ from pneumaquad.robot.builder import CONFIGURATIONS
 from pneumaquad.robot.environment import ENVIRONMENTS
 
 from .devices import feedback_status
-from .walking import MAX_SPEED, WALKING_MODES
+from .walking import MAX_SPEED, MAX_YAW_RATE, WALKING_MODES
 
 if TYPE_CHECKING:
     from .app import ConsoleApp
@@ -87,6 +87,9 @@ class ConsoleControls:
             self.walk_speed = gui.add_slider("Speed [mm/s]", -1000 * MAX_SPEED,
                                              1000 * MAX_SPEED, 5.0, 0.0)
             self.walk_heading = gui.add_slider("Heading [deg]", -180.0, 180.0, 5.0, 0.0)
+            fastest_turn = math.degrees(MAX_YAW_RATE)
+            self.walk_yaw_rate = gui.add_slider("Yaw rate [deg/s]", -fastest_turn,
+                                                fastest_turn, 0.5, 0.0)
             self.walk_stop = gui.add_button("Stop walking", icon=viser.Icon.PLAYER_STOP)
             self.walk_status = gui.add_markdown("")
         with gui.add_folder("Model"):
@@ -151,17 +154,24 @@ class ConsoleControls:
         self.walk_mode.on_update(lambda _event: self._walk())
         self.walk_speed.on_update(lambda _event: self._walk())
         self.walk_heading.on_update(lambda _event: self._walk())
+        self.walk_yaw_rate.on_update(lambda _event: self._walk())
         self.walk_stop.on_click(lambda _event: self._stop_walking())
 
     def _walk(self) -> None:
         if self._syncing:
             return
         self.app.set_walking(self.walk_mode.value, self.walk_speed.value / 1000.0,
-                             math.radians(self.walk_heading.value))
+                             math.radians(self.walk_heading.value),
+                             math.radians(self.walk_yaw_rate.value))
 
     def _stop_walking(self) -> None:
-        self.walk_speed.value = 0.0
-        self.app.set_walking(speed=0.0)
+        self._syncing = True
+        try:
+            self.walk_speed.value = 0.0
+            self.walk_yaw_rate.value = 0.0
+        finally:
+            self._syncing = False
+        self.app.set_walking(speed=0.0, yaw_rate=0.0)
 
     def show_walking_command(self) -> None:
         """Move the walking widgets to the app's present command (set from elsewhere)."""
@@ -171,6 +181,7 @@ class ConsoleControls:
             self.walk_mode.value = walking.mode
             self.walk_speed.value = round(1000.0 * walking.speed)
             self.walk_heading.value = round(math.degrees(walking.heading))
+            self.walk_yaw_rate.value = round(math.degrees(walking.yaw_rate), 1)
         finally:
             self._syncing = False
 

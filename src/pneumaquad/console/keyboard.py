@@ -8,7 +8,8 @@ key      effect
 =======  ==========================================
 w / s    body speed +5 / −5 mm/s (±50 mm/s at most)
 a / d    heading +15° / −15° (counter-clockwise +)
-space    stop (speed 0)
+q / e    yaw rate +1 / −1 °/s (automatic; ±5 °/s at most)
+space    stop (speed and yaw rate 0)
 m        next walking mode: off → automatic → shared
 =======  ==========================================
 """
@@ -20,17 +21,21 @@ import sys
 import threading
 from collections.abc import Callable
 
-from .walking import MAX_SPEED, WALKING_MODES
+from .walking import MAX_SPEED, MAX_YAW_RATE, WALKING_MODES
 
 __all__ = ["HELP", "KeyboardControl", "key_command"]
 
 SPEED_STEP = 0.005  # [m/s]
 HEADING_STEP = math.radians(15.0)
-HELP = "keys: w/s speed ±5 mm/s, a/d heading ±15°, space stop, m walking mode"
+YAW_RATE_STEP = math.radians(1.0)  # [rad/s]
+HELP = ("keys: w/s speed ±5 mm/s, a/d heading ±15°, q/e yaw rate ±1°/s (automatic), "
+        "space stop, m walking mode")
 
 
-def key_command(key: str, mode: str, speed: float, heading: float) -> tuple[str, float, float]:
-    """The walking command (mode, speed [m/s], heading [rad]) after pressing ``key``."""
+def key_command(key: str, mode: str, speed: float, heading: float, yaw_rate: float = 0.0
+                ) -> tuple[str, float, float, float]:
+    """The walking command (mode, speed [m/s], heading [rad], yaw rate [rad/s]) after
+    pressing ``key``."""
     key = key.lower()
     if key == "w":
         speed = min(speed + SPEED_STEP, MAX_SPEED)
@@ -40,12 +45,16 @@ def key_command(key: str, mode: str, speed: float, heading: float) -> tuple[str,
         heading += HEADING_STEP
     elif key == "d":
         heading -= HEADING_STEP
+    elif key == "q":
+        yaw_rate = min(yaw_rate + YAW_RATE_STEP, MAX_YAW_RATE)
+    elif key == "e":
+        yaw_rate = max(yaw_rate - YAW_RATE_STEP, -MAX_YAW_RATE)
     elif key == " ":
-        speed = 0.0
+        speed = yaw_rate = 0.0
     elif key == "m":
         mode = WALKING_MODES[(WALKING_MODES.index(mode) + 1) % len(WALKING_MODES)]
     heading = math.remainder(heading, 2.0 * math.pi)
-    return mode, round(speed, 6), heading
+    return mode, round(speed, 6), heading, round(yaw_rate, 9)
 
 
 class KeyboardControl:
@@ -54,15 +63,15 @@ class KeyboardControl:
     Parameters
     ----------
     state : callable
-        Returns the present (mode, speed, heading).
+        Returns the present (mode, speed, heading, yaw rate).
     apply : callable
-        Takes the new (mode, speed, heading).
+        Takes the new (mode, speed, heading, yaw rate).
     stream
         A terminal (``sys.stdin`` by default); nothing is read when it is not a TTY.
     """
 
-    def __init__(self, state: Callable[[], tuple[str, float, float]],
-                 apply: Callable[[str, float, float], None], stream=None) -> None:
+    def __init__(self, state: Callable[[], tuple[str, float, float, float]],
+                 apply: Callable[[str, float, float, float], None], stream=None) -> None:
         self.state, self.apply = state, apply
         self.stream = sys.stdin if stream is None else stream
         self.active = bool(getattr(self.stream, "isatty", lambda: False)())

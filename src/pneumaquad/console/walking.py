@@ -55,6 +55,8 @@ __all__ = ["WALKING_MODES", "ConsoleWalking", "reach"]
 WALKING_MODES = ("off", "automatic", "shared")
 #: Fastest commanded body speed [m/s].
 MAX_SPEED = 0.05
+#: Fastest commanded yaw rate [rad/s] of the automatic walk (5°/s).
+MAX_YAW_RATE = math.radians(5.0)
 #: The force-controlled stance of the console's crawl (that of ``pneumaquad robot walk``).
 DEFAULT_STANCE = StanceControlSettings()
 
@@ -114,6 +116,7 @@ class ConsoleWalking:
         self.mode = "off"
         self.speed = 0.0
         self.heading = 0.0
+        self.yaw_rate = 0.0
         self.crawl: OnlineCrawl | None = None
         #: World → walking frame (2×2): the world axes turned by the yaw held while walking.
         self.to_frame = np.eye(2)
@@ -151,14 +154,18 @@ class ConsoleWalking:
         if mode != "off":
             self.command(self.speed, self.heading)
 
-    def command(self, speed: float, heading: float) -> None:
-        """Body speed [m/s] (clipped to ±:data:`MAX_SPEED`) and heading [rad] (automatic)."""
+    def command(self, speed: float, heading: float, yaw_rate: float | None = None) -> None:
+        """Body speed [m/s] (clipped to ±:data:`MAX_SPEED`), heading [rad] and, in
+        automatic mode, yaw rate [rad/s] (clipped to ±:data:`MAX_YAW_RATE`; the shared
+        crawl does not turn); ``yaw_rate`` None keeps the present one."""
         self.speed = float(np.clip(speed, -MAX_SPEED, MAX_SPEED))
         self.heading = float(heading)
+        if yaw_rate is not None:
+            self.yaw_rate = float(np.clip(yaw_rate, -MAX_YAW_RATE, MAX_YAW_RATE))
         if self.crawl is not None:
             self.crawl.command_velocity(self.speed, self.heading)
         if self.live is not None:
-            self.live.command(self.speed, self.heading)
+            self.live.command(self.speed, self.heading, self.yaw_rate)
 
     def _in_frame(self, points: np.ndarray) -> np.ndarray:
         """xy [m] in the walking frame of world points (..., ≥2) [m]."""
@@ -232,7 +239,9 @@ class ConsoleWalking:
         if self.crawl is None and self.live is None:
             return f"mode **{self.mode}**"
         lines = [f"mode **{self.mode}**, speed {1000 * self.speed:.0f} mm/s, heading "
-                 f"{math.degrees(self.heading):.0f}°"]
+                 f"{math.degrees(self.heading):.0f}°"
+                 + (f", yaw rate {math.degrees(self.yaw_rate):+.1f}°/s"
+                    if self.live is not None else "")]
         if self.live is not None:
             live = self.live
             doing = live.phase_name or "standing"

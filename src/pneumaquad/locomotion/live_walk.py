@@ -9,18 +9,20 @@ of :func:`.walking.walk_phase` (force-controlled stance, swing height from the g
 body placement on slopes, heading and course hold) and its gate, a verified stance.
 Nothing of the walk is specific to live driving except when its walks begin and end:
 
-* a command with a speed starts a walk of :attr:`LiveWalk.cycles` gait cycles at that
-  speed and heading (heading counter-clockwise from the body's forward axis when the
-  walking began; each walk holds the yaw it begins with); where the legs cannot reach
-  that speed at that heading, the fastest speed they reach (in steps of a fifth) is
-  walked and said;
+* a command with a speed or a yaw rate starts a walk of :attr:`LiveWalk.cycles` gait
+  cycles at that speed and heading (counter-clockwise from the body's forward axis when
+  the walk begins; each walk holds the yaw it begins with, or turns from it at the yaw
+  rate: an arc, or at speed 0 a turn in place); where the legs cannot reach the command,
+  the largest share of it they reach (speed and yaw rate scaled together, in steps of a
+  fifth) is walked and said;
 * a new command takes effect at the end of the gait cycle in progress, where the walk's
   four feet are down (the instant of a lift-off): speed 0 stands there, in the walk's
   pose, under the walk's force-controlled stance (:class:`.stance_control.StanceSettle`);
   the same speed and heading again resumes that walk where it stopped; another walk
   begins after its feet are re-placed, one at a time, from where the last cycle left
-  them (:func:`.replacement.replacement_phases`, the body turned back to the yaw the
-  walking began with), the legs have shed their internal forces
+  them (:func:`.replacement.replacement_phases`, the body turned back to the walking
+  frame's yaw: the yaw walking began with, or the one the last turn left), the legs have
+  shed their internal forces
   (:func:`.walking.settled_hold`) and its stance is verified;
 * where only the body has to move between two stances (every foot within
   :data:`IN_PLACE` of its foothold: the first walk from the standing pose, straight or
@@ -87,7 +89,7 @@ class _Scheduled:
 class _Walk:
     """One walk of the schedule: its command, settings, gait, plan and start [s]."""
 
-    command: tuple[float, float]
+    command: tuple[float, float, float]  # speed [m/s], heading [rad], yaw rate [rad/s]
     settings: WalkSettings
     gait: CrawlGait
     plan: WalkPlan
@@ -147,7 +149,8 @@ class LiveWalk:
         standing = simulation.reference_angles.copy()
         #: The yaw [rad] of the walking frame: the thorax's when the walking began.
         self.yaw = float(thorax_attitude(simulation)[2])
-        self.speed, self.heading = 0.0, 0.0
+        self.speed, self.heading, self.yaw_rate = 0.0, 0.0, 0.0
+        self._turned = False  # a turning walk ran since the walking frame was measured
         self.schedule: list[_Scheduled] = []
         self.rest = _Rest(standing)
         self.message = ""
@@ -156,17 +159,19 @@ class LiveWalk:
         self._steps_before = 0  # feet lifted by walks dropped from the schedule
 
     # --- commands --------------------------------------------------------------------
-    def command(self, speed: float, heading: float) -> None:
-        """Walk at ``speed`` [m/s] along ``heading`` [rad] (walking frame; a negative speed
-        walks the other way), or stand (speed 0), from the end of the cycle in progress."""
+    def command(self, speed: float, heading: float, yaw_rate: float = 0.0) -> None:
+        """Walk at ``speed`` [m/s] along ``heading`` [rad] (the body's frame when the walk
+        begins; a negative speed walks the other way) while the body turns at
+        ``yaw_rate`` [rad/s] (counter-clockwise: an arc, or with speed 0 a turn in place),
+        or stand (both 0), from the end of the cycle in progress."""
         if speed < 0.0:
             speed, heading = -speed, heading + math.pi
         heading = math.remainder(heading, 2.0 * math.pi)
         if speed == 0.0:
             heading = self.heading
-        if (speed, heading) == (self.speed, self.heading):
+        if (speed, heading, yaw_rate) == self._command:
             return
-        self.speed, self.heading = float(speed), float(heading)
+        self.speed, self.heading, self.yaw_rate = float(speed), float(heading), float(yaw_rate)
         now = self.simulation.time
         current = self._current(now)
         if current is None:  # standing, or at the end of the schedule
@@ -183,6 +188,15 @@ class LiveWalk:
             self._extend(cut)
         # in a transition, the walk it leads to is checked against the command when it
         # begins (:meth:`_enter`)
+
+    @property
+    def _command(self) -> tuple[float, float, float]:
+        return (self.speed, self.heading, self.yaw_rate)
+
+    @property
+    def moving(self) -> bool:
+        """The command asks to walk or turn."""
+        return self.speed != 0.0 or self.yaw_rate != 0.0
 
     @property
     def walking(self) -> bool:
@@ -235,11 +249,12 @@ class LiveWalk:
 
     def _extend(self, begin: float) -> None:
         """Schedule, from ``begin`` [s] and :attr:`rest`, the walk the command asks (none
-        at speed 0: the robot stands where the schedule leaves it)."""
-        if self.speed == 0.0:
+        when it asks neither speed nor turn: the robot stands where the schedule leaves
+        it)."""
+        if not self.moving:
             return
         rest = self.rest
-        if rest.walk is not None and rest.walk.command == (self.speed, self.heading):
+        if rest.walk is not None and rest.walk.command == self._command:
             walk = rest.walk  # resume it: from its steady cycle's start after the first
             self._append_walk(walk.settings, walk.gait, walk.plan, begin,
                               walk.settings.period if rest.walk_time > 0.5 * walk.settings.period
@@ -248,8 +263,8 @@ class LiveWalk:
         try:
             settings, gait, plan = self._plan()
         except (UnreachablePlanError, ValueError) as error:
-            self.message = f"cannot walk heading {math.degrees(self.heading):.0f}°: {error}"
-            self.speed = 0.0
+            self.message = f"cannot walk {self._described()}: {error}"
+            self.speed = self.yaw_rate = 0.0
             return
         begin = self._append_transition(begin, plan.references[0],
                                         body_sway(gait, np.array([0.0]))[0], gait)
@@ -260,7 +275,7 @@ class LiveWalk:
         """Schedule the walk of ``plan`` from ``begin`` [s], from its time ``walk_time``
         [s] on (0: its start, gated by a verified stance; a cycle boundary: resumed)."""
         start = begin - walk_time
-        walk = _Walk((self.speed, self.heading), settings, gait, plan, start)
+        walk = _Walk(self._command, settings, gait, plan, start)
         phase = walk_phase(self.simulation, settings, gait, plan, start,
                            name=f"walk {self.walks + 1}")
         if walk_time:
@@ -272,27 +287,44 @@ class LiveWalk:
                           end - start)
 
     def _plan(self) -> tuple[WalkSettings, CrawlGait, WalkPlan]:
-        """The walk of the command: its settings, gait and plan (at the fastest speed of
-        :data:`SPEED_SCALES` the legs reach)."""
+        """The walk of the command: its settings, gait and plan (at the fastest speed and
+        yaw rate, scaled together by :data:`SPEED_SCALES`, that the legs reach)."""
         robot = self.simulation.robot
+        period = self.settings.period
         error: Exception = UnreachablePlanError("no speed reaches")
         for scale in SPEED_SCALES:
-            speed = self.speed * scale
-            asked = replace(self.settings, speed=speed, heading=self.heading,
-                            distance=speed * self.settings.period * self.cycles)
+            speed, rate = self.speed * scale, self.yaw_rate * scale
+            if speed == 0.0:  # a turn in place by the cycles' turn
+                asked = replace(self.settings, heading=0.0, yaw_rate=rate,
+                                turn=rate * period * self.cycles)
+            else:
+                asked = replace(self.settings, speed=speed, heading=self.heading,
+                                yaw_rate=rate, distance=speed * period * self.cycles)
             settings, posture = reachable_plan(robot, asked)
             if posture is None:
                 continue
+            if speed == 0.0:  # whole cycles of the period chosen, at the rate asked
+                settings = replace(settings, turn=rate * settings.period * self.cycles)
             try:
                 gait, plan, _ = planned_walk(robot, settings, posture)
             except (UnreachablePlanError, ValueError) as reason:
                 error = reason
                 continue
             self.message = ("" if scale == 1.0 else
-                            f"walking at {1000 * speed:.0f} mm/s: the fastest the legs "
-                            f"reach at heading {math.degrees(self.heading):.0f}°")
+                            f"{scale:.0%} of the command: the most the legs reach "
+                            f"({self._described()})")
             return settings, gait, plan
         raise error
+
+    def _described(self) -> str:
+        """The command in words."""
+        words = []
+        if self.speed:
+            words.append(f"{1000 * self.speed:.0f} mm/s at heading "
+                         f"{math.degrees(self.heading):.0f}°")
+        if self.yaw_rate:
+            words.append(f"turning {math.degrees(self.yaw_rate):+.1f}°/s")
+        return ", ".join(words)
 
     def _append_transition(self, begin: float, end_pose: Array, body_sway_after: Array,
                            gait: CrawlGait) -> float:
@@ -307,9 +339,12 @@ class LiveWalk:
             phases = [Phase("shift", SHIFT_TIME,
                             smooth_ramp(rest.pose, end_pose, begin, SHIFT_TIME), closed)]
         else:
+            # after a turn, the body keeps the yaw it turned to (the walking frame is
+            # measured again when the re-placement begins)
+            turned = rest.walk is not None and rest.walk.settings.body_yaw_rate() != 0.0
             phases = replacement_phases(self.simulation, rest.pose, end_pose, begin,
                                         gait.com_offset, "re-place", body_move=body_move,
-                                        heading=self.yaw)
+                                        heading=None if turned else self.yaw)
             hold = Phase("hold", 3.0, end_pose, closed)
             phases += (settled_hold(self.simulation, hold, self.settings)
                        if self.settings.stance_control is not None else [hold])
@@ -338,7 +373,7 @@ class LiveWalk:
                 if self.schedule:  # the schedule ran out: stand in its last pose
                     self._steps_before = self.steps_taken()
                     self.schedule = []
-                    if self.speed != 0.0:
+                    if self.moving:
                         self._extend(now)
                         continue
                 entry = self._standing()
@@ -361,6 +396,7 @@ class LiveWalk:
             references = (pose if stance is None
                           else StanceSettle(self.simulation, pose, stance))
             phase = Phase(STAND, math.inf, references, closed, feedback=stance is not None)
+            self._measure_frame(None)
             self.simulation.joint_control["mode"] = phase.modes()
             self.simulation.stop_force_tracking()
             self._entered = _Scheduled(self.simulation.time, phase)
@@ -375,13 +411,13 @@ class LiveWalk:
         walk = entry.walk
         if walk is not None:
             reason = None
-            if walk.command != (self.speed, self.heading):
+            if walk.command != self._command:
                 reason = "command changed"
             elif entry.phase.gate is not None:
                 reason, _ = entry.phase.gate(simulation)
                 if reason is not None:
                     self.message = f"walk stopped: {reason}"
-                    self.speed = 0.0
+                    self.speed = self.yaw_rate = 0.0
             if reason is not None:  # stand in the walk's first pose, or walk on
                 self.schedule = self.schedule[: self.schedule.index(entry)]
                 self.rest = _Rest(walk.plan.references[0], walk.sway(walk.start),
@@ -390,7 +426,15 @@ class LiveWalk:
                 entry = self._current(simulation.time)
                 if entry is None:
                     return None
+        self._measure_frame(entry.walk)
         simulation.joint_control["mode"] = entry.phase.modes()
         simulation.stop_force_tracking()
         self._entered = entry
         return entry
+
+    def _measure_frame(self, walk: _Walk | None) -> None:
+        """Beginning a phase after a turning walk: the walking frame is the yaw the
+        turn left the body in."""
+        if self._turned and (walk is None or walk.settings.body_yaw_rate() == 0.0):
+            self.yaw = float(thorax_attitude(self.simulation)[2])
+        self._turned = walk is not None and walk.settings.body_yaw_rate() != 0.0
