@@ -13,10 +13,13 @@ normal force above 1 N) and the thorax pose.
     .venv/bin/python docs/examples/console_walk.py --speed 15 --speed 30
     .venv/bin/python docs/examples/console_walk.py --speed 15 --stance position
     .venv/bin/python docs/examples/console_walk.py --speed 15 --heading 90
+    .venv/bin/python docs/examples/console_walk.py --speed 0 --yaw-rate 2
 
 Prints per run: the time from the command to the walk's start, the body's travel along
 the heading and its forward (x) and sideways (y) travel (the thorax, the walk's planned
-sway taken out), the largest |yaw| and the final yaw, steps taken, the mean and lowest
+sway taken out: meaningful for walks that do not turn), the largest |yaw|, the final yaw
+and the yaw turned while walking, how far the centre of the four feet moved (a turn in
+place's drift), steps taken, the mean and lowest
 thorax height, the fraction of chunks whose loaded-feet margin is negative (and those
 with no loaded foot), whether the thorax fell below 0.25 m, and the wall time spent in
 the console's chunks while walking (stepping and refreshing the scene and panels, as the
@@ -43,9 +46,10 @@ SETTLE_CHUNKS = 25  # 0.5 s of 20 ms chunks before walking starts
 FALLEN_HEIGHT = 0.25  # thorax height [m] below which the robot counts as fallen
 
 
-def walk(speed: float, duration: float, stance: str, heading: float = 0.0
-         ) -> dict[str, float]:
-    """One automatic walk at ``speed`` [m/s] and ``heading`` [rad]; the measured figures."""
+def walk(speed: float, duration: float, stance: str, heading: float = 0.0,
+         yaw_rate: float = 0.0) -> dict[str, float]:
+    """One automatic walk at ``speed`` [m/s], ``heading`` [rad] and ``yaw_rate``
+    [rad/s]; the measured figures."""
     app = ConsoleApp(configuration="quadruped", environment="flat", port=0, real_time=False)
     try:
         if stance == "position":
@@ -55,7 +59,7 @@ def walk(speed: float, duration: float, stance: str, heading: float = 0.0
         for _ in range(SETTLE_CHUNKS):
             app.advance()
         commanded = simulation.time
-        app.set_walking("automatic", speed=speed, heading=heading)
+        app.set_walking("automatic", speed=speed, heading=heading, yaw_rate=yaw_rate)
         live = app.walking.live
         while not live.walking and not app.message and simulation.time < commanded + 60.0:
             app.advance()
@@ -68,6 +72,7 @@ def walk(speed: float, duration: float, stance: str, heading: float = 0.0
             return simulation.data.xpos[thorax][:2] - walking.sway(simulation.time)
 
         start = body()
+        feet_start = simulation.foot_positions()[:, :2].mean(axis=0)
         chunks = round(duration / (app.chunk_steps * simulation.control_step))
         margins, yaws, heights = [], [], []
         wall = 0.0
@@ -82,7 +87,7 @@ def walk(speed: float, duration: float, stance: str, heading: float = 0.0
             heights.append(simulation.data.xpos[thorax][2])
         moved = body() - start
         margins = np.asarray(margins)
-        yaws = np.degrees(np.asarray(yaws))
+        yaws = np.degrees(np.unwrap(yaws))
         return {
             "command to the walk's start [s]": began - commanded,
             "walked [s]": len(margins) * app.chunk_steps * simulation.control_step,
@@ -91,6 +96,9 @@ def walk(speed: float, duration: float, stance: str, heading: float = 0.0
             "sideways y [m]": moved[1],
             "max |yaw| [deg]": float(np.max(np.abs(yaws))),
             "final yaw [deg]": float(yaws[-1]),
+            "turned [deg]": float(yaws[-1] - yaws[0]),
+            "centre of the feet moved [m]": float(np.hypot(
+                *(simulation.foot_positions()[:, :2].mean(axis=0) - feet_start))),
             "steps": app.walking.steps_taken,
             "mean thorax height [m]": float(np.mean(heights)),
             "min thorax height [m]": float(np.min(heights)),
@@ -115,6 +123,8 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=30.0, help="walking time measured [s]")
     parser.add_argument("--heading", type=float, default=0.0,
                         help="walking direction [deg], counter-clockwise from forward")
+    parser.add_argument("--yaw-rate", type=float, default=0.0,
+                        help="body yaw rate [deg/s], counter-clockwise (0: straight)")
     parser.add_argument(
         "--stance",
         choices=("force", "position"),
@@ -123,8 +133,10 @@ def main() -> None:
     )
     args = parser.parse_args()
     for speed in args.speed or [15.0, 30.0]:
-        figures = walk(speed / 1000.0, args.duration, args.stance, math.radians(args.heading))
-        print(f"{speed:g} mm/s, heading {args.heading:g}°, {args.stance} stance:")
+        figures = walk(speed / 1000.0, args.duration, args.stance, math.radians(args.heading),
+                       math.radians(args.yaw_rate))
+        print(f"{speed:g} mm/s, heading {args.heading:g}°, yaw rate {args.yaw_rate:g}°/s, "
+              f"{args.stance} stance:")
         for name, value in figures.items():
             if isinstance(value, float) and not math.isnan(value):
                 print(f"  {name}: {value:.3f}")
