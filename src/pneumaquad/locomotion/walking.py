@@ -234,9 +234,13 @@ def walk_phase(simulation: RobotSimulation, settings: WalkSettings, gait: CrawlG
     step = simulation.control_step
     duration = settings.duration()
 
+    last = len(plan.references) - 1
+
     def walk(times: np.ndarray) -> np.ndarray:
-        index = np.clip(np.round((times - start) / step).astype(int), 0,
-                        len(plan.references) - 1)
+        first, end = (round((float(times[k]) - start) / step) for k in (0, -1))
+        if first >= 0 and end <= last and end - first == len(times) - 1:  # a chunk's steps
+            return plan.references[first:end + 1].copy()
+        index = np.clip(np.round((times - start) / step).astype(int), 0, last)
         return plan.references[index]
 
     references = walk
