@@ -136,7 +136,8 @@ class LiveWalk:
     simulation : RobotSimulation
         The free quadruped standing in its standing pose (its present joint references).
     settings : WalkSettings, optional
-        Everything but the speed, heading and distance (the defaults of ``robot walk``).
+        Everything but the speed, heading, yaw rate, turn and distance (the defaults of
+        ``robot walk``).
     cycles : int
         Gait cycles of each walk.
     """
@@ -147,7 +148,8 @@ class LiveWalk:
         self.settings = settings or WalkSettings()
         self.cycles = cycles
         standing = simulation.reference_angles.copy()
-        #: The yaw [rad] of the walking frame: the thorax's when the walking began.
+        #: The yaw [rad] of the walking frame: the thorax's when the walking began, or
+        #: when the last turn ended.
         self.yaw = float(thorax_attitude(simulation)[2])
         self.speed, self.heading, self.yaw_rate = 0.0, 0.0, 0.0
         self._turned = False  # a turning walk ran since the walking frame was measured
