@@ -162,8 +162,6 @@ class ConsoleWalking:
         self.heading = float(heading)
         if yaw_rate is not None:
             self.yaw_rate = float(np.clip(yaw_rate, -MAX_YAW_RATE, MAX_YAW_RATE))
-        if self.crawl is not None:
-            self.crawl.command_velocity(self.speed, self.heading)
         if self.live is not None:
             self.live.command(self.speed, self.heading, self.yaw_rate)
 

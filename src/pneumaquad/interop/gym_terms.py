@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import mujoco
 import numpy as np
 
 from pneumaquad.rig.simulate import NORMAL_PRESSURE, NORMAL_TEMPERATURE
@@ -78,10 +77,7 @@ def body_rotation(simulation: RobotSimulation) -> np.ndarray:
     points x up, z forward). A thorax-frame vector ``v`` has body-axis components
     ``body_rotation(sim) @ v``; it is the nominal placement's rotation, a constant.
     """
-    quaternion = simulation.model.body_quat[simulation.robot.thorax_id]
-    matrix = np.zeros(9)
-    mujoco.mju_quat2Mat(matrix, quaternion)
-    return matrix.reshape(3, 3)
+    return simulation.thorax_placement
 
 
 def write_observation(simulation: RobotSimulation, to_body: np.ndarray,

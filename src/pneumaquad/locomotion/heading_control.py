@@ -31,7 +31,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-import mujoco
 import numpy as np
 
 from pneumaquad.locomotion.walk import thorax_rotation
@@ -106,9 +105,7 @@ class HeadingHold:
         self._matrices = np.zeros((3, 3, 3))
         self._thorax_matrix = simulation.data.xmat[robot.thorax_id]  # a view, thorax → world
         self._thorax_position = simulation.data.xpos[robot.thorax_id][:2]  # a view
-        nominal = np.zeros(9)
-        mujoco.mju_quat2Mat(nominal, simulation.model.body_quat[robot.thorax_id])
-        self._nominal = nominal.reshape(3, 3)
+        self._nominal = simulation.thorax_placement
         # heading [rad], heading set (0/1), foot rotation [rad], last call's time [s]
         self._state = np.zeros(4)
         self._state[LAST_TIME] = simulation.time

@@ -54,7 +54,7 @@ from .replacement import foothold_moves, replacement_phases
 from .stance_control import StanceSettle
 from .walk import WalkPlan
 from .walk_settings import WalkSettings
-from .walking import planned_walk, reachable_plan, settled_hold, walk_phase
+from .walking import planned_walk, reachable_plan, stance_hold, walk_phase
 
 __all__ = ["IN_PLACE", "SHIFT_TIME", "LiveWalk"]
 
@@ -94,6 +94,11 @@ class _Walk:
     gait: CrawlGait
     plan: WalkPlan
     start: float
+
+    @property
+    def turns(self) -> bool:
+        """The walk turns the body (a turn in place or an arc)."""
+        return self.settings.body_yaw_rate() != 0.0
 
     @cached_property
     def lift_offs(self) -> Array:
@@ -343,13 +348,11 @@ class LiveWalk:
         else:
             # after a turn, the body keeps the yaw it turned to (the walking frame is
             # measured again when the re-placement begins)
-            turned = rest.walk is not None and rest.walk.settings.body_yaw_rate() != 0.0
+            turned = rest.walk is not None and rest.walk.turns
             phases = replacement_phases(self.simulation, rest.pose, end_pose, begin,
                                         gait.com_offset, "re-place", body_move=body_move,
                                         heading=None if turned else self.yaw)
-            hold = Phase("hold", 3.0, end_pose, closed)
-            phases += (settled_hold(self.simulation, hold, self.settings)
-                       if self.settings.stance_control is not None else [hold])
+            phases += stance_hold(self.simulation, end_pose, self.settings)
         for phase in phases:
             self.schedule.append(_Scheduled(begin, phase))
             begin += phase.duration
@@ -437,6 +440,6 @@ class LiveWalk:
     def _measure_frame(self, walk: _Walk | None) -> None:
         """Beginning a phase after a turning walk: the walking frame is the yaw the
         turn left the body in."""
-        if self._turned and (walk is None or walk.settings.body_yaw_rate() == 0.0):
+        if self._turned and (walk is None or not walk.turns):
             self.yaw = float(thorax_attitude(self.simulation)[2])
-        self._turned = walk is not None and walk.settings.body_yaw_rate() != 0.0
+        self._turned = walk is not None and walk.turns

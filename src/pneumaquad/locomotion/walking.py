@@ -53,6 +53,7 @@ __all__ = [
     "planned_walk",
     "reachable_plan",
     "settled_hold",
+    "stance_hold",
     "stand_up_into",
     "tip_over_series",
     "walk_phase",
@@ -220,6 +221,16 @@ def settled_hold(simulation: RobotSimulation, hold: Phase,
                     references=StanceSettle(simulation, hold.references,
                                             settings.stance_control)),
             replace(hold, duration=hold.duration / 2)]
+
+
+def stance_hold(simulation: RobotSimulation, pose: np.ndarray,
+                settings: WalkSettings, duration: float = 3.0) -> list[Phase]:
+    """The hold of ``pose`` [rad] for ``duration`` [s] before a walk begins from it (after
+    the feet were re-placed): :func:`settled_hold` when the walk's stance is
+    force-controlled, else a plain hold under position control."""
+    hold = Phase("hold", duration, pose, np.ones(simulation.robot.joint_count, dtype=bool))
+    return [hold] if settings.stance_control is None else settled_hold(simulation, hold,
+                                                                      settings)
 
 
 def walk_phase(simulation: RobotSimulation, settings: WalkSettings, gait: CrawlGait,

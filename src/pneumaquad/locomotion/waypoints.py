@@ -38,7 +38,7 @@ from .walk_settings import WalkSettings, WalkSettingsError
 from .walking import (
     planned_walk,
     reachable_plan,
-    settled_hold,
+    stance_hold,
     stand_up_into,
     walk_phase,
     walking_outcome,
@@ -173,14 +173,10 @@ def waypoint_phases(simulation: RobotSimulation, settings: WalkSettings,
                                     f"{error}", ("waypoints",)) from None
         phases += moves
         time += sum(phase.duration for phase in moves)
-        hold = Phase("hold", 3.0, after.plan.references[0], closed)
-        if settings.stance_control is not None:
-            held = settled_hold(simulation, hold, settings)
-            phases += [replace(phase, name=f"{phase.name} before {after.phase}")
-                       for phase in held]
-        else:
-            phases.append(replace(hold, name=f"hold before {after.phase}"))
-        time += hold.duration
+        held = stance_hold(simulation, after.plan.references[0], settings)
+        phases += [replace(phase, name=f"{phase.name} before {after.phase}")
+                   for phase in held]
+        time += sum(phase.duration for phase in held)
         phases.append(walk_phase(simulation, after.settings, after.gait, after.plan, time,
                                  after.phase))
         time += phases[-1].duration
