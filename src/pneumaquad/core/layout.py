@@ -26,6 +26,7 @@ __all__ = [
     "INPUT_TANH",
     "POLYNOMIAL_COEFFICIENTS",
     "RIG_PARAMETER_FIELDS",
+    "STEP_WORK_DTYPE",
     "SUPPLY_DTYPE",
     "SUPPLY_IDEAL",
     "SUPPLY_TANK",
@@ -167,6 +168,23 @@ SUPPLY_DTYPE = np.dtype([
     ("tank_temperature", "f8"),  # [K] (tank)
     ("drawn_mass", "f8"),  # total mass drawn from the supply [kg]
     ("gas_constant", "f8"),  # R of the stored gas [J/(kg K)]
+])
+
+#: What one actuator's control step keeps between its substeps: the kernels advance all
+#: actuators substep by substep (the next actuator's arithmetic does not wait on this
+#: one's, so the processor overlaps them), and hold here what each set up at the step's
+#: start. Internal to :mod:`pneumaquad.core.kernel`.
+STEP_WORK_DTYPE = np.dtype([
+    ("target_voltage", "f8"),  # centered valve command of the step [V]
+    ("supply_pressure", "f8"),  # pressure the regulator delivers over the step [Pa]
+    ("cap_source_pressure", "f8"),  # what the cap port sees [Pa] (valve_connections)
+    ("cap_conductance", "f8"),  # cd*A [m^2] or ISO 6358 C [m^3/(s Pa)]
+    ("rod_source_pressure", "f8"),  # [Pa]
+    ("rod_conductance", "f8"),  # as cap_conductance
+    ("inverse_heat_capacity_ratio", "f8"),  # 1/k [-] (pneumatics.flow_constants)
+    ("flow_coefficient", "f8"),  # k, or n (polytropic) [-]
+    ("compression_exponent", "f8"),  # k*R/cp + 1, or n [-]
+    ("drawn_mass", "f8"),  # drawn from the supply over the step so far [kg]
 ])
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import difflib
+import functools
 import os
 import re
 import tomllib
@@ -76,10 +77,20 @@ def _resolve(name_or_path: str | os.PathLike[str]) -> Path:
     return Path(name_or_path)
 
 
+@functools.lru_cache(maxsize=64)
+def _parsed(path: Path, modified_ns: int, size: int) -> dict[str, Any]:
+    """A TOML file's tables, parsed once per version of the file (its modification time
+    and size are part of the key): a study loads the same parameter file for every case.
+    Shared between callers, who never modify it."""
+    with path.open("rb") as f:
+        return tomllib.load(f)
+
+
 def _read(path: Path) -> dict[str, Any]:
+    """The tables of a TOML file (shared: not to be modified)."""
     try:
-        with path.open("rb") as f:
-            return tomllib.load(f)
+        status = path.stat()
+        return _parsed(path, status.st_mtime_ns, status.st_size)
     except FileNotFoundError:
         raise ParameterError([Problem("<file>", str(path), "does not exist")]) from None
     except OSError as exc:
@@ -128,7 +139,8 @@ def _merged(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
 
 
 def _read_layered(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
-    """The raw tables of a parameter file, laid over the set it ``extends`` (recursively).
+    """The raw tables of a parameter file, laid over the set it ``extends`` (recursively);
+    not to be modified (a file that extends nothing gives its cached tables themselves).
 
     Raises
     ------
@@ -136,9 +148,10 @@ def _read_layered(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
         For an ``extends`` that is not a string, names no set or file, or loops back.
     """
     raw = _read(path)
-    base = raw.pop(EXTENDS_KEY, None)
+    base = raw.get(EXTENDS_KEY)
     if base is None:
         return raw
+    raw = {key: value for key, value in raw.items() if key != EXTENDS_KEY}
     if not isinstance(base, str):
         raise ParameterError([Problem(EXTENDS_KEY, base, "should be a parameter set name or "
                                       "a path to a TOML file")], source=str(path))

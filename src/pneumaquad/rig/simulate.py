@@ -43,6 +43,7 @@ from pneumaquad.rig.recording import (
     RigResult,
     as_columns,
     first_non_finite,
+    first_non_finite_of_rigs,
     new_rows,
     record_rows,
     skipped_columns,
@@ -131,12 +132,7 @@ def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
                                                     control_step, scaled)
             else:
                 commands[i] = signals[i, k]
-        if shared:
-            step_rigs(params, state, commands, control_step, substeps, supply, outputs)
-        else:
-            for i in range(rigs):
-                step_rigs(params[i:i + 1], state[i:i + 1], commands[i:i + 1], control_step,
-                          substeps, supply[i:i + 1], outputs[i:i + 1])
+        step_rigs(params, state, commands, control_step, substeps, supply, outputs)
         for i in range(rigs):
             reference = references[i] if closed_loop else math.nan
             write_row(records[i], k, (k + 1) * control_step, commands[i], reference,
@@ -287,7 +283,9 @@ def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bo
     records, rows = new_rows(total, rigs)
     dt = setups[0].simulation.control_step
     substeps = setups[0].simulation.substeps
-    skipped = [skipped_columns(setup, closed_loop) for setup in setups]
+    checked = np.ones((rigs, N_COLUMNS), dtype=bool)
+    for i, setup in enumerate(setups):
+        checked[i, skipped_columns(setup, closed_loop)] = False
     delays = np.array([delay_steps(setup) for setup in setups], dtype=np.int64)
     start_positions = bank.state["position"].copy()
     done = 0
@@ -302,7 +300,7 @@ def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bo
                               signals, done, count, dt, substeps, records, delays,
                               start_positions)
                 computed = time.perf_counter()
-                _record_chunk(rows, done, count, skipped, recorders, started, several)
+                _record_chunk(rows, done, count, checked, recorders, started, several)
                 if clock is not None:
                     clock.add("simulation", computed - begun)
                     clock.add("recording", time.perf_counter() - computed)
@@ -317,33 +315,24 @@ def _simulate_fixed(setups: list[RigSetup], signals: np.ndarray, closed_loop: bo
             for i in range(rigs)]
 
 
-def _record_chunk(rows: np.ndarray, done: int, count: int, skipped: list[list[int]],
+def _record_chunk(rows: np.ndarray, done: int, count: int, checked: np.ndarray,
                   recorders: list[RunRecorder | None], started: float, several: bool) -> None:
-    """Check the chunk's rows of every rig for non-finite values and hand them to the
-    recorders; on one, the finite rows go out and :class:`RigDivergedError` names the rig
-    that diverged first (the earliest row; the lowest index among equals)."""
-    if rows.shape[0] == 1:  # one rig: the check and the hand-over, nothing else
-        block = rows[0, done:done + count]
-        where = first_non_finite(block, skipped[0])
-        if where is not None:
-            stop_diverged(recorders[0], rows[0], done, done + where[0],
-                          RIG_COLUMNS[where[1]], float(block[where[0], 0]), started, "fixed",
-                          0 if several else None)
-        record_rows(recorders[0], block)
-        return
-    found = [first_non_finite(rows[i, done:done + count], skipped[i])
-             for i in range(rows.shape[0])]
-    diverged = [i for i, where in enumerate(found) if where is not None]
+    """Check the chunk's rows of every rig for non-finite values (in the columns
+    ``checked``, (N, N_COLUMNS) of bool) and hand them to the recorders; on one, the
+    finite rows go out and :class:`RigDivergedError` names the rig that diverged first
+    (the earliest row; the lowest index among equals)."""
+    found = first_non_finite_of_rigs(rows, done, done + count, checked)
+    diverged = [i for i in range(rows.shape[0]) if found[i, 0] >= 0]
     for i, recorder in enumerate(recorders):
-        if found[i] is None:
+        if found[i, 0] < 0:
             record_rows(recorder, rows[i, done:done + count])
     if not diverged:
         return
-    first = min(diverged, key=lambda i: found[i][0])
+    first = min(diverged, key=lambda i: found[i, 0])
     for i in diverged:
         if i != first:
-            record_rows(recorders[i], rows[i, done:done + found[i][0]])
-    row, column = found[first]
+            record_rows(recorders[i], rows[i, done:done + found[i, 0]])
+    row, column = int(found[first, 0]), int(found[first, 1])
     stop_diverged(recorders[first], rows[first], done, done + row, RIG_COLUMNS[column],
                   float(rows[first, done + row, 0]), started, "fixed",
                   first if several else None)
