@@ -211,6 +211,7 @@ def _expected_parameters(setup: RigSetup) -> dict[str, object]:
     simple, friction, thermo = valve.simple, a.friction, a.thermodynamics
     cap_port, rod_port = _ports(setup)
     k, r = gas.heat_capacity_ratio, gas.gas_constant
+    polytropic = thermo.polytropic_exponent if thermo.model == "polytropic" else None
     moving_mass = rig.load_mass + cylinder.piston_mass
     return {
         "heat_capacity_ratio": k,
@@ -222,6 +223,16 @@ def _expected_parameters(setup: RigSetup) -> dict[str, object]:
         "unchoked_flow_constant": pytest.approx(math.sqrt(2 * k / (r * (k - 1))), rel=1e-14),
         "choked_flow_constant": pytest.approx(
             math.sqrt(k / (r * ((k + 1) / 2) ** ((k + 1) / (k - 1)))), rel=1e-14),
+        # eq 4.1.5 and 4.1.10: 1/k, and k and k*R/cp + 1 (both n if polytropic); the
+        # laminar limit's factors r_l^(1/k) and sqrt(1 - r_l^((k-1)/k))
+        "inverse_heat_capacity_ratio": pytest.approx(1 / k, rel=1e-15),
+        "flow_coefficient": polytropic if polytropic else k,
+        "compression_exponent": polytropic if polytropic else pytest.approx(
+            k * r / gas.specific_heat_cp + 1, rel=1e-15),
+        "laminar_power": pytest.approx(valve.laminar_pressure_ratio ** (1 / k), rel=1e-15),
+        "laminar_root": pytest.approx(
+            math.sqrt(1 - valve.laminar_pressure_ratio ** ((k - 1) / k)), rel=1e-10),
+        "supply_temperature_root": math.sqrt(gas.supply_temperature),
         "supply_pressure": a.supply.supply_pressure,
         "exhaust_pressure": a.supply.exhaust_pressure,
         "cap_area": cylinder.cap_area,

@@ -38,6 +38,20 @@ def test_stribeck_curve_skips_only_an_exact_zero() -> None:
         assert stribeck_curve(v, fs, fc, vs, i) == fc + (fs - fc) * math.exp(-((abs(v) / vs) ** i))
 
 
+def test_stribeck_curve_of_a_piston_nearly_at_rest_is_the_plain_law_bit_for_bit() -> None:
+    """Below the velocity where (|v|/vS)^i < 2^-55 the curve skips the power and the
+    exponential; its value is still the plain law's, for any exponent, on both sides of
+    that velocity and down to the smallest velocities."""
+    fs, fc, _, vs, _, _ = LAW
+    tiny = np.concatenate([np.geomspace(1e-300, 1e-3, 6001), [5e-324, 1e-320, 1e-310]])
+    for exponent in (0.3, 0.5, 1.0, 2.0, 2.5, 5.0, 10.0):
+        edge = vs * 2.0 ** (-55.0 / exponent)  # about where the shortcut ends
+        for v in np.concatenate([tiny, edge * np.linspace(0.25, 4.0, 1501)]):
+            plain = fc + (fs - fc) * math.exp(-((abs(v) / vs) ** exponent))
+            assert stribeck_curve(v, fs, fc, vs, exponent) == plain, (exponent, v)
+            assert stribeck_curve(-v, fs, fc, vs, exponent) == plain, (exponent, -v)
+
+
 def test_force_equals_the_plain_law_and_the_combined_form() -> None:
     for v in VELOCITIES:
         plain = plain_force(v, *LAW)

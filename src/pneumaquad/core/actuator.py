@@ -21,6 +21,7 @@ from pneumaquad.core.physics.friction import (
     FRICTION_VISCOUS,
 )
 from pneumaquad.core.physics.orifice import orifice_coefficients
+from pneumaquad.core.pneumatics import FlowConstants, derived_flow_constants
 from pneumaquad.params.schema import (
     ActuatorParameters,
     ValveParameters,
@@ -142,6 +143,12 @@ def pack_parameters(actuator: ActuatorParameters, out: np.void | None = None) ->
     record["polytropic_exponent"] = thermo.polytropic_exponent
     record["heat_transfer_coefficient"] = thermo.heat_transfer_coefficient
     record["wall_temperature"] = thermo.wall_temperature
+    constants = derived_flow_constants(
+        gas.heat_capacity_ratio, gas.gas_constant, gas.specific_heat_cp,
+        gas.supply_temperature, record["thermo_model"], thermo.polytropic_exponent,
+        valve.laminar_pressure_ratio)
+    for field, value in zip(FlowConstants._fields, constants, strict=True):
+        record[field] = value
     for field in layout.RIG_PARAMETER_FIELDS:  # not a rig: pack_rig_parameters sets them
         record[field] = 0
     return record

@@ -44,7 +44,8 @@ from pneumaquad.core.pneumatics import (
     flow_constants,
     friction_and_slope_of,
     friction_of,
-    heun_pneumatics,
+    heun_finish,
+    heun_first_rates,
     pneumatic_force_of,
     pneumatic_rates,
     substep_connections,
@@ -106,12 +107,23 @@ def advance_actuators(
     for index in range(count):
         state[index].position = positions[index]
     for _ in range(substeps):
-        for index in range(count):
+        for index in range(0, count, 2):  # two at a time: their chains interleave
+            paired = index + 1 < count
             s = state[index]
             velocity = velocities[index]
-            pneumatic_substep(params[index], s, work[index], s.position, velocity, h,
-                              outputs[index])
+            started = substep_begin(params[index], s, work[index], s.position, velocity, h)
+            if paired:
+                other = state[index + 1]
+                other_velocity = velocities[index + 1]
+                other_started = substep_begin(params[index + 1], other, work[index + 1],
+                                              other.position, other_velocity, h)
+            substep_end(params[index], s, work[index], s.position, velocity, h,
+                        outputs[index], started)
             s.position += h * velocity
+            if paired:
+                substep_end(params[index + 1], other, work[index + 1], other.position,
+                            other_velocity, h, outputs[index + 1], other_started)
+                other.position += h * other_velocity
     for index in range(count):
         p = params[index]
         s = state[index]
@@ -146,10 +158,6 @@ def begin_step(params, state, commands, supply, outputs):
         w.target_voltage = target
         w.supply_pressure = supply_pressure
         keep_connections(w, connections)
-        inverse_k, flow_coefficient, compression = flow_constants(p)
-        w.inverse_heat_capacity_ratio = inverse_k
-        w.flow_coefficient = flow_coefficient
-        w.compression_exponent = compression
         w.drawn_mass = 0.0
     return work
 
@@ -165,9 +173,10 @@ def keep_connections(w, connections):
 
 
 @compiled(inline=True)
-def pneumatic_substep(p, s, w, position, velocity, time_step, out):
-    """One Heun substep of an actuator's chambers (:func:`heun_pneumatics`) from its work
-    record ``w``, the spool moved first if it lags; adds the drawn mass to ``w``."""
+def substep_begin(p, s, w, position, velocity, time_step):
+    """The first half of an actuator's Heun substep (:func:`heun_pneumatics`) from its
+    work record ``w``: the spool moved if it lags, and the rates at the substep's start.
+    Returns what :func:`substep_end` takes: (connections, flow constants, rates)."""
     connections = (
         w.cap_source_pressure, w.cap_conductance, w.rod_source_pressure, w.rod_conductance
     )
@@ -176,9 +185,19 @@ def pneumatic_substep(p, s, w, position, velocity, time_step, out):
             p, s, w.target_voltage, True, w.supply_pressure, connections, time_step
         )
         keep_connections(w, connections)
-    constants = (w.inverse_heat_capacity_ratio, w.flow_coefficient, w.compression_exponent)
-    w.drawn_mass += heun_pneumatics(
-        p, constants, s, position, velocity, time_step, connections, out
+    constants = flow_constants(p)
+    return connections, constants, heun_first_rates(
+        p, constants, s, position, velocity, connections
+    )
+
+
+@compiled(inline=True)
+def substep_end(p, s, w, position, velocity, time_step, out, started):
+    """The second half of the substep begun by :func:`substep_begin` (``started``); adds
+    the drawn mass to ``w``."""
+    connections, constants, first = started
+    w.drawn_mass += heun_finish(
+        p, constants, s, position, velocity, time_step, connections, out, first
     )
 
 
@@ -280,13 +299,25 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
     h = control_step / substeps
     work = begin_step(params, state, commands, supply, outputs)
     for _ in range(substeps):
-        for index in range(count):
+        for index in range(0, count, 2):  # two at a time, as in advance_actuators
+            paired = index + 1 < count
             p = params[index]
             s = state[index]
-            out = outputs[index]
-            pneumatic_substep(p, s, work[index], s.position, s.velocity, h, out)
+            started = substep_begin(p, s, work[index], s.position, s.velocity, h)
+            if paired:
+                q = params[index + 1]
+                other = state[index + 1]
+                other_started = substep_begin(q, other, work[index + 1], other.position,
+                                              other.velocity, h)
+            substep_end(p, s, work[index], s.position, s.velocity, h, outputs[index],
+                        started)
+            if paired:
+                substep_end(q, other, work[index + 1], other.position, other.velocity, h,
+                            outputs[index + 1], other_started)
             if p.spacer == 0:
-                rig_mechanics_substep(p, s, h, out)
+                rig_mechanics_substep(p, s, h, outputs[index])
+            if paired and q.spacer == 0:
+                rig_mechanics_substep(q, other, h, outputs[index + 1])
     for index in range(count):
         p = params[index]
         s = state[index]

@@ -63,6 +63,14 @@ ACTUATOR_PARAMETERS_DTYPE = np.dtype([
     ("critical_pressure_ratio", "f8"),  # [-]
     ("unchoked_flow_constant", "f8"),  # C1 of eq 4.1.8 [sqrt(kg K/J)]
     ("choked_flow_constant", "f8"),  # C2 of eq 4.1.9 [sqrt(kg K/J)]
+    # derived from the gas, the thermodynamic model and the laminar ratio when packed
+    # (pneumatics.flow_constants reads them; none changes after packing)
+    ("inverse_heat_capacity_ratio", "f8"),  # 1/k of eq 4.1.5 [-]
+    ("flow_coefficient", "f8"),  # k, or n (polytropic), of eq 4.1.10 [-]
+    ("compression_exponent", "f8"),  # k*R/cp + 1, or n, of eq 4.1.10 [-]
+    ("laminar_power", "f8"),  # r_l^(1/k) (physics.orifice.laminar_limit) [-]
+    ("laminar_root", "f8"),  # sqrt(1 - r_l^((k-1)/k)) [-]
+    ("supply_temperature_root", "f8"),  # sqrt(Ts) [sqrt(K)]
     # supply
     ("supply_pressure", "f8"),  # regulated supply pressure [Pa]
     ("exhaust_pressure", "f8"),  # [Pa]
@@ -181,9 +189,6 @@ STEP_WORK_DTYPE = np.dtype([
     ("cap_conductance", "f8"),  # cd*A [m^2] or ISO 6358 C [m^3/(s Pa)]
     ("rod_source_pressure", "f8"),  # [Pa]
     ("rod_conductance", "f8"),  # as cap_conductance
-    ("inverse_heat_capacity_ratio", "f8"),  # 1/k [-] (pneumatics.flow_constants)
-    ("flow_coefficient", "f8"),  # k, or n (polytropic) [-]
-    ("compression_exponent", "f8"),  # k*R/cp + 1, or n [-]
     ("drawn_mass", "f8"),  # drawn from the supply over the step so far [kg]
 ])
 

@@ -12,6 +12,7 @@ supply record.
 """
 
 import math
+from typing import NamedTuple
 
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.layout import (
@@ -43,6 +44,7 @@ from pneumaquad.core.physics.orifice import (
     area_to_sonic_conductance,
     iso6358_flux_of_ratio,
     iso6358_scale,
+    laminar_limit,
     laminar_temperature_of_ratio,
     orifice_flux_of_ratio,
 )
@@ -131,23 +133,46 @@ def valve_connections(p, centered: float, supply_pressure: float):
     return cap_source, cap_area, rod_source, rod_area
 
 
+class FlowConstants(NamedTuple):
+    """An actuator's constants of the port flows and the energy balance (all [-])."""
+
+    inverse_heat_capacity_ratio: float  # 1/k of eq 4.1.5
+    flow_coefficient: float  # k, or n (polytropic), of eq 4.1.10
+    compression_exponent: float  # k·R/cp + 1, or n, of eq 4.1.10
+    laminar_power: float  # r_l^(1/k) (orifice.laminar_limit)
+    laminar_root: float  # sqrt(1 - r_l^((k-1)/k)) (orifice.laminar_limit)
+    supply_temperature_root: float  # sqrt(Ts) [sqrt(K)], of the air filling a chamber
+
+
 @compiled
 def flow_constants(p):
-    """The actuator's constants of the port flows and the energy balance.
+    """The actuator's :class:`FlowConstants` (fields of its packed parameters, derived
+    once by :func:`derived_flow_constants`)."""
+    return FlowConstants(p.inverse_heat_capacity_ratio, p.flow_coefficient,
+                         p.compression_exponent, p.laminar_power, p.laminar_root,
+                         p.supply_temperature_root)
 
-    Returns (1/k, inflow coefficient, compression exponent) of eq 4.1.5 and 4.1.10 (see
-    :func:`pneumaquad.core.physics.chamber.energy_exponents`). The kernels compute them
-    once per actuator and control step and pass them to :func:`pneumatic_rates`, instead
-    of dividing again at each of its evaluations.
+
+@compiled
+def derived_flow_constants(
+    heat_capacity_ratio, gas_constant, specific_heat_cp, supply_temperature, thermo_model,
+    polytropic_exponent, laminar_pressure_ratio,
+):
+    """The :class:`FlowConstants` of a gas, a thermodynamic model and a laminar ratio:
+    of eq 4.1.5 and 4.1.10 (see :func:`pneumaquad.core.physics.chamber.energy_exponents`)
+    and the laminar limit of the port flows
+    (:func:`pneumaquad.core.physics.orifice.laminar_limit`). Computed once when the
+    parameters are packed (``pneumaquad.core.actuator.pack_parameters``), so that no rate
+    evaluation divides or raises to a power for them again.
     """
     flow_coefficient, compression = energy_exponents(
-        p.thermo_model,
-        p.heat_capacity_ratio,
-        p.gas_constant,
-        p.specific_heat_cp,
-        p.polytropic_exponent,
+        thermo_model, heat_capacity_ratio, gas_constant, specific_heat_cp,
+        polytropic_exponent,
     )
-    return 1.0 / p.heat_capacity_ratio, flow_coefficient, compression
+    inverse_k = 1.0 / heat_capacity_ratio
+    laminar_power, laminar_root = laminar_limit(laminar_pressure_ratio, inverse_k)
+    return FlowConstants(inverse_k, flow_coefficient, compression, laminar_power,
+                         laminar_root, math.sqrt(supply_temperature))
 
 
 @compiled
@@ -182,14 +207,20 @@ def port_flow(p, constants, conductance, source_pressure, pressure, temperature)
             p.laminar_pressure_ratio,
         )
     else:
+        if crossing == p.supply_temperature:  # filling: the root known beforehand
+            root = constants.supply_temperature_root
+        else:
+            root = math.sqrt(crossing)
         flux = orifice_flux_of_ratio(
             ratio,
-            upstream / math.sqrt(crossing),
-            constants[0],
+            upstream / root,
+            constants.inverse_heat_capacity_ratio,
             p.unchoked_flow_constant,
             p.choked_flow_constant,
             p.critical_pressure_ratio,
             p.laminar_pressure_ratio,
+            constants.laminar_power,
+            constants.laminar_root,
         )
     return sign * conductance * flux, crossing
 
@@ -207,8 +238,8 @@ def chamber_rate(
         flow_temp,
         temperature,
         wall_area,
-        constants[1],
-        constants[2],
+        constants.flow_coefficient,
+        constants.compression_exponent,
         p.heat_capacity_ratio,
         p.gas_constant,
         p.thermo_model,
@@ -298,20 +329,25 @@ def heun_pneumatics(p, constants, s, position, velocity, time_step, connections,
     ``constants`` is :func:`flow_constants` of ``p``, ``connections`` the tuple of
     :func:`valve_connections` for the substep. Updates s
     in place; adds time_step-weighted flows to ``out.cap_mass_flow``, ``out.rod_mass_flow``
-    and ``out.supply_mass_flow`` (callers divide by the step length).
+    and ``out.supply_mass_flow`` (callers divide by the step length). Returns the mass
+    drawn from the supply [kg]. The two halves are :func:`heun_first_rates` and
+    :func:`heun_finish`, for callers that interleave several actuators' substeps.
     """
+    first = heun_first_rates(p, constants, s, position, velocity, connections)
+    return heun_finish(p, constants, s, position, velocity, time_step, connections, out, first)
+
+
+@compiled(inline=True)
+def heun_first_rates(p, constants, s, position, velocity, connections):
+    """The rates of :func:`pneumatic_rates` at the substep's start (Heun's first stage)."""
     cap_source, cap_conductance, rod_source, rod_conductance = connections
-    pc = s.cap_pressure
-    pr = s.rod_pressure
-    mc = s.cap_mass
-    mr = s.rod_mass
-    dpc1, dpr1, fc1, fr1, draw1 = pneumatic_rates(
+    return pneumatic_rates(
         p,
         constants,
-        pc,
-        pr,
-        mc,
-        mr,
+        s.cap_pressure,
+        s.rod_pressure,
+        s.cap_mass,
+        s.rod_mass,
         position,
         velocity,
         cap_source,
@@ -319,6 +355,19 @@ def heun_pneumatics(p, constants, s, position, velocity, time_step, connections,
         rod_source,
         rod_conductance,
     )
+
+
+@compiled(inline=True)
+def heun_finish(p, constants, s, position, velocity, time_step, connections, out, first):
+    """The rest of :func:`heun_pneumatics` from its first-stage rates ``first``
+    (:func:`heun_first_rates`): the predictor, the rates there, the corrected state and
+    the outputs. Returns the mass drawn from the supply [kg]."""
+    cap_source, cap_conductance, rod_source, rod_conductance = connections
+    dpc1, dpr1, fc1, fr1, draw1 = first
+    pc = s.cap_pressure
+    pr = s.rod_pressure
+    mc = s.cap_mass
+    mr = s.rod_mass
     h = time_step
     pc_pred = max(pc + h * dpc1, 1.0)
     pr_pred = max(pr + h * dpr1, 1.0)

@@ -20,6 +20,11 @@ FRICTION_LUGRE = 4
 #: exp(-x) is exactly 0.0 in double precision beyond this [-] (the smallest subnormal is
 #: exp(-745.13)).
 EXP_UNDERFLOW = 746.0
+
+#: With |v|/vS = m·2^e (0.5 <= m < 1, :func:`math.frexp`) and e·i at most this, the
+#: Stribeck exponent (|v|/vS)^i is below 2^-55 (for i > 0), and exp(-x) of any x below
+#: 2^-54 rounds to exactly 1.0.
+STRIBECK_FLAT_BINADE = -55.0
 #: tanh(x) is exactly ±1.0 in double precision beyond this [-] (from x = 19.06 on; the
 #: C library returns ±1 outright above 22).
 TANH_SATURATION = 22.0
@@ -63,7 +68,12 @@ def stribeck_curve(
     float
         g(v) [N], between Fc and Fs.
     """
-    exponent = (abs(velocity) / stribeck_velocity) ** stribeck_exponent
+    ratio = abs(velocity) / stribeck_velocity
+    if ratio == 0.0 or math.frexp(ratio)[1] * stribeck_exponent <= STRIBECK_FLAT_BINADE:
+        # (|v|/vS)^i < 2^-55, so exp(-(|v|/vS)^i) is exactly 1.0: the same value without
+        # the power and the exponential (a piston at rest, most of a held position)
+        return coulomb_force + (static_force - coulomb_force)
+    exponent = ratio**stribeck_exponent
     if exponent > EXP_UNDERFLOW:  # exp(-exponent) is exactly 0.0: skip it
         return coulomb_force
     return coulomb_force + (static_force - coulomb_force) * math.exp(-exponent)

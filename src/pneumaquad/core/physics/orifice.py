@@ -74,15 +74,41 @@ def orifice_flux(
     """
     if upstream_pressure <= 0.0:
         return 0.0
+    inverse_k = 1.0 / heat_capacity_ratio
+    laminar_power, laminar_root = laminar_limit(laminar_ratio, inverse_k)
     return orifice_flux_of_ratio(
         downstream_pressure / upstream_pressure,
         upstream_pressure / math.sqrt(upstream_temperature),
-        1.0 / heat_capacity_ratio,
+        inverse_k,
         c1,
         c2,
         critical_ratio,
         laminar_ratio,
+        laminar_power,
+        laminar_root,
     )
+
+
+@compiled
+def laminar_limit(laminar_ratio: float, inverse_k: float) -> tuple[float, float]:
+    """The two factors of eq 4.1.5 at the laminar limit ratio r_l.
+
+    Parameters
+    ----------
+    laminar_ratio : float
+        r_l [-] (see :func:`orifice_flux`).
+    inverse_k : float
+        1/k [-].
+
+    Returns
+    -------
+    tuple of float
+        (r_l^(1/k), sqrt(1 - r_l^((k-1)/k))) [-]: Psi at r_l is C1·Pu/sqrt(Tu) times both.
+        Constants of the gas and the regularisation; the kernels compute them once per
+        actuator and control step.
+    """
+    power = laminar_ratio**inverse_k
+    return power, math.sqrt(1.0 - laminar_ratio / power)
 
 
 @compiled
@@ -94,11 +120,14 @@ def orifice_flux_of_ratio(
     c2: float,
     critical_ratio: float,
     laminar_ratio: float,
+    laminar_power: float,
+    laminar_root: float,
 ) -> float:
     """:func:`orifice_flux` from its intermediate quantities, for callers that have them.
 
     The actuator kernels compute the pressure ratio once per port for the flow and its
-    temperature (:func:`laminar_temperature_of_ratio`), and 1/k once per control step.
+    temperature (:func:`laminar_temperature_of_ratio`), and 1/k and the factors of the
+    laminar limit once per control step.
 
     Parameters
     ----------
@@ -110,6 +139,8 @@ def orifice_flux_of_ratio(
         1/k [-].
     c1, c2, critical_ratio, laminar_ratio : float
         See :func:`orifice_flux`.
+    laminar_power, laminar_root : float
+        :func:`laminar_limit` of ``laminar_ratio`` and ``inverse_k`` [-].
 
     Returns
     -------
@@ -121,8 +152,7 @@ def orifice_flux_of_ratio(
     if ratio >= 1.0:
         return 0.0
     if ratio > laminar_ratio:
-        power = laminar_ratio**inverse_k
-        at_limit = c1 * scale * power * math.sqrt(1.0 - laminar_ratio / power)
+        at_limit = c1 * scale * laminar_power * laminar_root
         return at_limit * (1.0 - ratio) / (1.0 - laminar_ratio)
     power = ratio**inverse_k
     # ratio**((k-1)/k) == ratio / ratio**(1/k): one power evaluation instead of two.
