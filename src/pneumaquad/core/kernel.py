@@ -16,11 +16,12 @@ near zero velocity stay stable, and the Coulomb models get an exact stick/slip s
 Actuators are arrays of named records (:mod:`pneumaquad.core.layout`); each loop takes
 an actuator's records once (``p = params[i]``) and hands them to the per-actuator
 functions of :mod:`pneumaquad.core.pneumatics`. The loops run substep by substep over all
-actuators (not actuator by actuator over all substeps): one actuator's substep is a long
-chain of dependent divisions, square roots and powers, and the next actuator's, which
-does not depend on it, fills the processor's idle units meanwhile (about 10 % faster for
-the same arithmetic, so the same results, bit for bit). What each actuator sets up at the
-step's start waits between its substeps in a work record
+actuators (not actuator by actuator over all substeps), two actuators at a time, the
+first stage of Heun's method of both before the rest of either: one actuator's substep
+is a long chain of dependent divisions, square roots and powers, and the other's, which
+does not depend on it, fills the processor's idle units meanwhile. The arithmetic of each
+actuator is the same as one at a time, so are the results, bit for bit. What each
+actuator sets up at the step's start waits between its substeps in a work record
 (:data:`pneumaquad.core.layout.STEP_WORK_DTYPE`).
 """
 
