@@ -17,8 +17,10 @@ from pneumaquad.io.run_folder import (
     RunFolderError,
     RunFolderVersionError,
     RunFolderWriter,
+    drawing_plots,
     read_recording,
     read_run_folder,
+    scratch_run_folders,
 )
 from pneumaquad.params import load_rig
 
@@ -210,3 +212,22 @@ def test_read_run_reads_a_folder_with_its_units_and_parameters(tmp_path: Path) -
     copied.write_text(read_table_metadata(run.recording_file).file["parameters.toml"],
                       encoding="utf-8")
     assert load_rig(copied) == load_rig("thesis-rig") == load_rig(run.parameters_file)
+
+
+def test_a_scratch_run_folder_has_its_recording_as_parquet_only(tmp_path: Path) -> None:
+    """Inside scratch_run_folders a recording skips its CSV file (and plots are not
+    drawn); the Parquet file holds every row; outside, and after an error inside, both
+    are back."""
+    assert drawing_plots()
+    with scratch_run_folders():
+        assert not drawing_plots()
+        _write_run(tmp_path / "scratch")
+    assert drawing_plots()
+    assert not (tmp_path / "scratch" / "recording.csv").exists()
+    run = read_run_folder(tmp_path / "scratch")
+    np.testing.assert_array_equal(run.recording["cap pressure [Pa]"], _rows(0, 8)[:, 2])
+    with pytest.raises(RuntimeError), scratch_run_folders():
+        raise RuntimeError("a failing case")
+    assert drawing_plots()
+    _write_run(tmp_path / "kept")
+    assert (tmp_path / "kept" / "recording.csv").is_file()

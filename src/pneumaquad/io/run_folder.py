@@ -18,15 +18,21 @@ and at every update alike. A folder written in a newer format than
 :data:`FORMAT_VERSION` is refused by the reader with a message naming both versions; a
 folder without the key (written before it existed, or by a run killed before its summary)
 is read as format 1.
+
+Inside :func:`scratch_run_folders` (a study's cases whose folders are read once and
+removed) a run folder's recording has no CSV file and no plots are drawn; the Parquet
+file, the summary and the rest are written as always.
 """
 
 from __future__ import annotations
 
+import contextvars
 import json
 import math
 import os
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -44,8 +50,9 @@ __all__ = [
     "PARAMETERS_NAME", "PARQUET_NAME", "PROFILE_NAME", "SUMMARY_NAME", "TIMING_NAME",
     "TRAJECTORY_NAME",
     "RunFolder", "RunFolderError", "RunFolderVersionError", "RunFolderWriter", "RunRecorder",
-    "create_run_folder", "detect_run_kind", "json_text", "jsonable", "read_json",
-    "read_recording", "read_run", "read_run_folder", "read_summary", "write_json",
+    "create_run_folder", "detect_run_kind", "drawing_plots", "json_text", "jsonable",
+    "read_json", "read_recording", "read_run", "read_run_folder", "read_summary",
+    "scratch_run_folders", "write_json",
 ]
 
 #: Version of the layout below, written into every summary under :data:`FORMAT_KEY`.
@@ -62,6 +69,26 @@ PROFILE_NAME = "profile.json"
 PACKETS_NAME = "packets.parquet"
 
 RunKind = Literal["rig", "robot"]
+
+_SCRATCH = contextvars.ContextVar("pneumaquad scratch run folders", default=False)
+
+
+@contextmanager
+def scratch_run_folders() -> Iterator[None]:
+    """Within the block, run folders are scratch: read once and removed (a study's case
+    whose folder is not kept). Their recording is written as Parquet only, without the
+    CSV file that is there for a person or an interrupted run, and no plots are drawn
+    (:func:`drawing_plots`): both cost a share of a short run's time."""
+    token = _SCRATCH.set(True)
+    try:
+        yield
+    finally:
+        _SCRATCH.reset(token)
+
+
+def drawing_plots() -> bool:
+    """Whether a run draws its plots (everywhere but inside :func:`scratch_run_folders`)."""
+    return not _SCRATCH.get()
 
 
 class RunFolderError(ValueError):
@@ -124,12 +151,16 @@ class RunRecorder(StreamedTable):
     background
         Write the CSV blocks from a writer thread (see
         :class:`~pneumaquad.io.tables.StreamedTable`).
+    write_csv
+        False: Parquet only (see :func:`scratch_run_folders`).
     """
 
-    def __init__(self, folder: Path, columns: Sequence[str], background: bool = False) -> None:
+    def __init__(self, folder: Path, columns: Sequence[str], background: bool = False,
+                 write_csv: bool = True) -> None:
         self.folder = Path(folder)
         super().__init__(self.folder / CSV_NAME, self.folder / PARQUET_NAME, columns,
-                         metadata=self._provenance, background=background)
+                         metadata=self._provenance, background=background,
+                         write_csv=write_csv)
 
     def _provenance(self) -> dict[str, str]:
         """The Parquet file's metadata: ``pneumaquad version``, ``run folder format`` and,
@@ -281,8 +312,10 @@ class RunFolderWriter:
 
     def recorder(self, columns: Sequence[str], background: bool = False) -> RunRecorder:
         """The streamed recording (``recording.csv`` live, ``recording.parquet`` on close;
-        ``background``: the CSV blocks written by a writer thread)."""
-        return RunRecorder(self.path, columns, background=background)
+        ``background``: the CSV blocks written by a writer thread; no CSV file inside
+        :func:`scratch_run_folders`)."""
+        return RunRecorder(self.path, columns, background=background,
+                           write_csv=not _SCRATCH.get())
 
     @property
     def packets_path(self) -> Path:

@@ -71,11 +71,14 @@ class StreamedTable:
         is in the file; :meth:`flush` waits for every block appended, and :meth:`close`
         (also after Ctrl-C or an error) writes them all before the Parquet file. Without
         it each block is in the file when :meth:`append` returns.
+    write_csv
+        False: no CSV file at all, the rows only kept for the Parquet file (a table that is
+        read once and discarded, where nobody needs what a killed run leaves).
     """
 
     def __init__(self, csv_path: Path, parquet_path: Path, columns: Sequence[str],
                  metadata: Mapping[str, str] | Callable[[], Mapping[str, str]] | None = None,
-                 background: bool = False) -> None:
+                 background: bool = False, write_csv: bool = True) -> None:
         self.metadata = metadata
         self.csv_path = Path(csv_path)
         self.parquet_path = Path(parquet_path)
@@ -89,10 +92,14 @@ class StreamedTable:
         self._rows = 0
         self._closed = False
         self._schema = pa.schema([pa.field(name, pa.float64()) for name in self.columns])
+        self._file: pa.NativeFile | None = None
+        self._writer: _WriterThread | None = None
+        if not write_csv:
+            return
         header = io.StringIO()
         csv.writer(header, lineterminator="\n").writerow(self.columns)
         # Arrow's own file: its writes go to the OS unbuffered and need no GIL.
-        self._file: pa.NativeFile | None = pa.OSFile(str(self.csv_path), "wb")
+        self._file = pa.OSFile(str(self.csv_path), "wb")
         self._file.write(header.getvalue().encode("utf-8"))
         self._csv_writer = pa_csv.CSVWriter(
             self._file, self._schema, write_options=pa_csv.WriteOptions(include_header=False))
@@ -117,7 +124,7 @@ class StreamedTable:
             Array of shape ``(n, len(columns))``; a 1-D array of length
             ``len(columns)`` is taken as a single row.
         """
-        if self._file is None:
+        if self._closed:
             raise RuntimeError("recorder is closed")
         data = np.asarray(block, dtype=np.float64)
         if data.ndim == 1:
@@ -133,7 +140,7 @@ class StreamedTable:
         self._rows += data.shape[0]
         if self._writer is not None:
             self._writer.submit(by_column)
-        else:
+        elif self._file is not None:
             self._write_block(by_column)
 
     def flush(self) -> None:

@@ -20,9 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from pneumaquad.io.run_folder import RunFolderWriter, create_run_folder
+from pneumaquad.io.run_folder import RunFolderWriter, create_run_folder, drawing_plots
 from pneumaquad.io.stage_clock import StageClock
-from pneumaquad.reporting.robot_plots import plot_walking, plot_waypoints
 from pneumaquad.robot.experiment import Phase, RobotRun, run_phases
 from pneumaquad.robot.simulation import RobotSimulation
 
@@ -74,7 +73,8 @@ class JudgedWalk:
         (:class:`~pneumaquad.robot.stance_check.StanceCheck`); None when the run was
         interrupted or diverged before the walk began.
     figure : Path or None
-        ``walking.png`` of a judged walk.
+        ``walking.png`` of a judged walk (None inside
+        :func:`~pneumaquad.io.run_folder.scratch_run_folders`).
     """
 
     run: RobotRun
@@ -189,9 +189,13 @@ def run_walk(
             sum(plan.cycle.unreachable_counts.values()))
         outcome["stance"] = stance
         outcome["period [s]"] = settings.period
-    with clock.stage("plots"):
-        figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
-                              figure_title or f"{verb} {where}")
+    figure = None
+    if drawing_plots():
+        with clock.stage("plots"):
+            from pneumaquad.reporting.robot_plots import plot_walking  # Matplotlib: slow
+
+            figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE,
+                                  tip_over, figure_title or f"{verb} {where}")
     return JudgedWalk(run, plan, _recorded(run, outcome), figure)
 
 
@@ -250,6 +254,8 @@ def run_waypoints(
                                          leg.phase)
                 tip_over = np.where(np.isfinite(series), series, tip_over)
     with clock.stage("plots"):
+        from pneumaquad.reporting.robot_plots import plot_walking, plot_waypoints
+
         figure = plot_walking(run.recording, robot.legs, folder / WALKING_FIGURE, tip_over,
                               f"walk through {len(path)} waypoints")
         plot_waypoints(run.recording, np.array([leg.target for leg in path]),

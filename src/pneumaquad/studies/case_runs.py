@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from pneumaquad.io.run_folder import scratch_run_folders
 from pneumaquad.params.errors import ParameterError, Problem
 from pneumaquad.params.loader import load_rig, load_robot
 from pneumaquad.params.schema import RigSetup
@@ -263,7 +264,11 @@ def _robot_batch(run: RunSpec, metrics: tuple[str, ...], cases: Sequence[Case],
         kept = runs_folder / f"case-{case.index:06d}" if runs_folder is not None else None
         folder = kept if kept is not None else Path(tempfile.mkdtemp(prefix="pneumaquad-case-"))
         try:
-            figures, note = _robot_case(run, metrics, case, folder)
+            if kept is None:
+                with scratch_run_folders():  # read once and removed: no CSV, no plots
+                    figures, note = _robot_case(run, metrics, case, folder)
+            else:
+                figures, note = _robot_case(run, metrics, case, folder)
             outcome = CaseOutcome(case.index, "ok", "", figures, note=note)
         except CaseInterruptedError:
             raise
@@ -310,10 +315,13 @@ def run_batch(run: RunSpec, metrics: Sequence[str], cases: Sequence[Case],
 
 
 def warm_up(kind: str) -> None:
-    """Load a worker's compiled code once, before its first case (a short rig run; a
-    robot worker also imports MuJoCo and the robot modules)."""
-    setup = load_rig("thesis-rig")
-    simulate_rig(setup, np.full(5, setup.actuator.valve.offset_voltage), closed_loop=False)
-    if not kind.startswith("rig-"):
+    """Load a worker's code once, before its first case: a rig worker's compiled code (a
+    short rig run); a robot worker's MuJoCo and robot modules (its compiled code loads in
+    its first case)."""
+    if kind.startswith("rig-"):
+        setup = load_rig("thesis-rig")
+        simulate_rig(setup, np.full(5, setup.actuator.valve.offset_voltage),
+                     closed_loop=False)
+    else:
         import pneumaquad.locomotion.walk_run
         import pneumaquad.robot.simulation  # noqa: F401

@@ -20,7 +20,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from pneumaquad.params.errors import ParameterError, Problem
 
@@ -111,6 +110,8 @@ class Distribution:
         (0, minimum), (0.25, lower quartile), (0.5, median), (0.75, upper quartile) and
         (1, maximum).
         """
+        from scipy import stats  # here: a study's worker processes never draw designs
+
         u = np.clip(np.asarray(fractions, dtype=float), _UNIT_EDGE, 1.0 - _UNIT_EDGE)
         if self.kind == "uniform":
             low, high = self.numbers

@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.stats import qmc
 
 from .spec import StudySpec
 
@@ -63,6 +62,8 @@ def unit_design(sampling: str, cases: int, dimensions: int, seed: int) -> np.nda
     second for a few hundred cases, a share of a rig study's time); Sobol: the first
     ``cases`` points of a scrambled Sobol sequence. Both are drawn from ``seed``.
     """
+    from scipy.stats import qmc  # here: a study's worker processes never draw designs
+
     rng = np.random.default_rng(seed)
     if sampling == "latin-hypercube":
         return qmc.LatinHypercube(dimensions, rng=rng).random(cases)
