@@ -20,10 +20,13 @@ Each path runs ``--repeats`` times, interleaved; the tables give the fastest (th
 disturbed by other work on the machine) and the range.
 
 ``--robot`` measures (b) on a robot study instead (the quadruped standing up, one case per
-supply pressure), e.g. ``--robot --cases 16``.
+supply pressure), e.g. ``--robot --cases 16``; ``--robot-study FILE`` on a study file as
+it is (e.g. the shipped ``studies/walk-sizing.toml``, 27 walks). Both also print the CPU
+time the pool's workers used against the one process's, and the workers' start-up.
 
 Run: ``.venv/bin/python benchmarks/study_speed.py [--cases 512] [--workers N]
-[--repeats 3] [--robot] [--json out.json]``. Nothing asserts on wall-clock time.
+[--repeats 3] [--robot | --robot-study FILE] [--json out.json]``. Nothing asserts on
+wall-clock time.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ import argparse
 import dataclasses
 import os
 import re
+import resource
 import tempfile
 import time
 from pathlib import Path
@@ -45,6 +49,7 @@ from pneumaquad.rig.metrics import general_metrics, step_metrics
 from pneumaquad.rig.simulate import simulate_rigs
 from pneumaquad.studies import (
     default_workers,
+    load_study,
     parse_study,
     pool_executor,
     run_study,
@@ -63,10 +68,12 @@ def _study(cases: int, batch: int | None = None):
     return spec if batch is None else dataclasses.replace(spec, batch=batch)
 
 
-def _timed_study(spec, executor) -> float:
+def _timed_study(spec, executor, failures: int = 0) -> float:
+    """Wall time of the study run afresh [s]; every case ran, ``failures`` of them
+    recorded as failed (a study file's refused cases)."""
     with tempfile.TemporaryDirectory() as folder:
         result = run_study(spec, Path(folder) / "study", executor)
-    assert result.ran == spec.cases and result.failed == 0
+    assert result.ran == spec.cases and result.failed == failures
     return result.wall_time
 
 
@@ -92,20 +99,37 @@ high = "60 psig"
 """
 
 
-def robot_efficiency(cases: int, workers: int, repeats: int) -> None:
-    """Parallel efficiency of the pool on a robot study (``--robot``)."""
-    spec = parse_study(ROBOT_STUDY.format(cases=cases))
-    warm_up("robot-stand")
+def _children_cpu() -> float:
+    """CPU seconds used so far by this process's finished child processes."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def robot_efficiency(spec, workers: int, repeats: int, json_path: str | None) -> None:
+    """Parallel efficiency of the pool on a robot study (``--robot``, ``--robot-study``)."""
+    warm_up(spec.run.kind)
     walls: dict[str, list[float]] = {"serial": [], "pool": []}
+    cpu: list[float] = []
+    with tempfile.TemporaryDirectory() as folder:  # the failed cases, counted once
+        failures = run_study(spec, Path(folder) / "study", serial_executor).failed
     for _ in range(repeats):
-        walls["serial"].append(_timed_study(spec, serial_executor))
-        walls["pool"].append(_timed_study(spec, pool_executor(workers)))
+        walls["serial"].append(_timed_study(spec, serial_executor, failures))
+        before = _children_cpu()
+        walls["pool"].append(_timed_study(spec, pool_executor(workers), failures))
+        cpu.append(_children_cpu() - before)
     serial, pooled = min(walls["serial"]), min(walls["pool"])
+    cases = spec.cases
     print(machine_line())
-    print(f"robot stand study, {cases} cases, {workers} workers, fastest of {repeats}: "
-          f"one process {serial:.2f} s ({cases / serial:.2f} cases/s), pool {pooled:.2f} s "
-          f"({cases / pooled:.2f} cases/s, start-up included)")
+    print(f"robot study {spec.name} ({spec.run.kind}), {cases} cases, {workers} workers, "
+          f"fastest of {repeats}: one process {serial:.2f} s ({cases / serial:.2f} cases/s), "
+          f"pool {pooled:.2f} s ({cases / pooled:.2f} cases/s, start-up included)")
+    print(f"the pool's workers used {min(cpu):.1f} s of CPU for what takes {serial:.1f} s in "
+          f"one process (+{min(cpu) - serial:.1f} s: their start-up and running side by "
+          "side)")
     print(f"parallel efficiency of the pool: {100 * serial / (workers * pooled):.0f} %")
+    write_json(json_path, {"study": spec.name, "cases": cases, "workers": workers,
+                           "walls [s]": walls, "worker cpu [s]": cpu,
+                           "parallel efficiency": serial / (workers * pooled)})
 
 
 def _direct(spec) -> float:
@@ -135,11 +159,18 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=default_workers())
     parser.add_argument("--robot", action="store_true",
                         help="measure the pool on a robot stand-up study instead")
+    parser.add_argument("--robot-study", metavar="FILE",
+                        help="measure the pool on this robot study file as it is")
     parser.add_argument("--json")
     arguments = parser.parse_args()
     cases, workers = arguments.cases, arguments.workers
+    if arguments.robot_study:
+        robot_efficiency(load_study(arguments.robot_study), workers, arguments.repeats,
+                         arguments.json)
+        return
     if arguments.robot:
-        robot_efficiency(cases, workers, arguments.repeats)
+        robot_efficiency(parse_study(ROBOT_STUDY.format(cases=cases)), workers,
+                         arguments.repeats, arguments.json)
         return
     load_before = " ".join(f"{value:.2f}" for value in os.getloadavg())
     warm_up("rig-step")
