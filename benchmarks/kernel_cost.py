@@ -282,14 +282,19 @@ _SCALAR = re.compile(r"\bv?(?:add|sub|mul|div|sqrt|max|min|fn?m(?:add|sub)\d*)sd
 _LANES = {"xmm": 2, "ymm": 4, "zmm": 8}
 
 
-def simd_width() -> dict[str, int]:
+def simd_width(work: Workload) -> dict[str, int]:
     """What the compiled ``step_actuators`` does with doubles, read from its machine code.
 
     Counts the packed (several doubles per instruction) and scalar double arithmetic
     instructions of the compiled kernel and the widest register a packed one uses:
     ``{"packed": …, "scalar": …, "lanes": 1, 2, 4 or 8}`` (1 when nothing is packed).
+    The kernel is compiled afresh for this, with the package's options and the
+    workload's types (numba shows no machine code of a function loaded from its cache).
     """
-    assembly = "\n".join(step_actuators.inspect_asm().values())
+    fresh = njit(error_model="numpy")(step_actuators.py_func)
+    fresh(work.params, work.state.copy(), work.commands[0], work.positions[0],
+          work.velocities[0], 1e-3, 1, work.supply.copy(), new_outputs(work.params.shape[0]))
+    assembly = "\n".join(fresh.inspect_asm().values())
     packed_lines = [line for line in assembly.splitlines() if _PACKED.search(line)]
     scalar = sum(1 for line in assembly.splitlines() if _SCALAR.search(line))
     lanes = 1
@@ -315,7 +320,14 @@ def main() -> None:
         "--actuator-steps",
         type=int,
         default=24000,
-        help="actuator-steps per repeat (steps = this / N, at least 10)",
+        help="actuator-steps per repeat (steps = this / N, at least --min-steps)",
+    )
+    parser.add_argument(
+        "--min-steps",
+        type=int,
+        default=1000,
+        help="control steps per repeat at least, for every N (default 1000: one whole "
+        "cycle of the 1 Hz piston drive, so every N sees the same flow regimes)",
     )
     parser.add_argument(
         "--command-amplitude",
@@ -349,7 +361,7 @@ def main() -> None:
     medians: dict[tuple[str, int, str], float] = {}
     actuators = {m: load_actuator("crr-gamma", overrides=list(o)) for m, o in MODELS.items()}
     for count in args.counts:
-        steps = max(args.actuator_steps // count, 10)
+        steps = max(args.actuator_steps // count, args.min_steps)
         works = {
             model: build_workload(
                 pack_parameters(actuator),
@@ -403,14 +415,15 @@ def main() -> None:
             f"{figures[f'full/N={TARGET_COUNT}/compiled']['ns_per_actuator_step'].min:.0f} ns)"
         )
 
-    vector = simd_width()
+    vector = simd_width(works["full"])
     figures["simd"] = vector
+    total = vector["packed"] + vector["scalar"]
     print(
-        f"\nSIMD of the compiled step_actuators: {vector['lanes']} double(s) per arithmetic "
-        f"instruction at most ({vector['packed']} packed, {vector['scalar']} scalar "
-        "instructions); the actuators' records are an array of structures and each "
-        "actuator's step branches on its valve and friction regime, so the loop over "
-        "actuators is not vectorised."
+        f"\nSIMD of the compiled step_actuators: {vector['packed']} of its {total} double "
+        f"arithmetic instructions packed (up to {vector['lanes']} doubles: straight-line "
+        "arithmetic of one actuator the compiler grouped), the rest one double each; the "
+        "actuators' records are an array of structures and each actuator's step branches "
+        "on its valve and friction regime, so the loop over actuators is not vectorised."
     )
     if 1000 in args.counts:
         per = medians["full", 1000, "compiled"]
