@@ -100,6 +100,7 @@ def test_named_views_are_the_arrays_they_name() -> None:
         "tendon_damping": model.tendon_damping,
         "tendon_ids": simulation.robot.tendon_id, "actuator_ids": simulation.robot.actuator_id,
         "settings": simulation.joint_control,
+        "work": simulation.bank.work,  # the kernel's own, not the simulation's
     }
     bundles = (simulation.mujoco, simulation.cylinders, simulation.actuators,
                simulation.controllers, simulation.trace)

@@ -47,6 +47,7 @@ from pneumaquad.core.pneumatics import (
     friction_of,
     heun_finish,
     heun_first_rates,
+    heun_pneumatics,
     pneumatic_force_of,
     pneumatic_rates,
     substep_connections,
@@ -83,15 +84,17 @@ def step_actuators(
         the given velocity) and temperatures.
     """
     advance_actuators(params, state, commands, positions, velocities, control_step, substeps,
-                      supply, outputs, True)
+                      supply, outputs, True, np.empty(params.shape[0], STEP_WORK_DTYPE))
 
 
 @compiled(inline=True)
 def advance_actuators(
     params, state, commands, positions, velocities, control_step, substeps, supply, outputs,
-    friction_output,
+    friction_output, work,
 ):
-    """:func:`step_actuators`, with the friction force output optional.
+    """:func:`step_actuators`, with the friction force output optional, in the work
+    records ``work`` ((N,) of :data:`pneumaquad.core.layout.STEP_WORK_DTYPE`, overwritten;
+    a caller that steps often keeps one array instead of allocating it every step).
 
     With ``friction_output`` False, ``outputs.friction_force`` is left at zero and the
     friction law (a Stribeck curve and a tanh per actuator) is not evaluated: the robot's
@@ -103,8 +106,14 @@ def advance_actuators(
     step's start.
     """
     count = params.shape[0]
+    if count == 1:  # nothing to interleave: its set-up stays in registers
+        drawn = advance_one_actuator(params[0], state[0], outputs[0], commands[0],
+                                     positions[0], velocities[0], supply[0], control_step,
+                                     substeps, friction_output)
+        draw_from_tank(supply[0], drawn)
+        return
     h = control_step / substeps
-    work = begin_step(params, state, commands, supply, outputs)
+    begin_step(params, state, commands, supply, outputs, work)
     for index in range(count):
         state[index].position = positions[index]
     for _ in range(substeps):
@@ -126,30 +135,54 @@ def advance_actuators(
                             other_velocity, h, outputs[index + 1], other_started)
                 other.position += h * other_velocity
     for index in range(count):
-        p = params[index]
-        s = state[index]
-        out = outputs[index]
-        velocity = velocities[index]
-        s.bristle_deflection = advance_bristle(p, s.bristle_deflection, velocity, control_step)
-        s.velocity = velocity
-        finish_outputs(p, s, s.position, control_step, out)
-        if friction_output:
-            out.friction_force = friction_of(p, velocity, s.bristle_deflection)
+        finish_actuator(params[index], state[index], outputs[index], velocities[index],
+                        control_step, friction_output)
     finish_step(work, supply)
 
 
 @compiled(inline=True)
-def begin_step(params, state, commands, supply, outputs):
+def advance_one_actuator(p, s, out, command, position, velocity, supply_record,
+                         control_step, substeps, friction_output):
+    """:func:`advance_actuators` of one actuator, substep after substep; returns the mass
+    drawn from the supply [kg] (not yet drawn from ``supply_record``)."""
+    h = control_step / substeps
+    target, lagging, supply_pressure, connections = begin_control_step(
+        p, s, out, command, supply_record
+    )
+    constants = flow_constants(p)
+    drawn = 0.0
+    s.position = position
+    for _ in range(substeps):
+        connections = substep_connections(
+            p, s, target, lagging, supply_pressure, connections, h
+        )
+        drawn += heun_pneumatics(p, constants, s, s.position, velocity, h, connections, out)
+        s.position += h * velocity
+    finish_actuator(p, s, out, velocity, control_step, friction_output)
+    return drawn
+
+
+@compiled(inline=True)
+def finish_actuator(p, s, out, velocity, control_step, friction_output):
+    """An externally driven actuator's bristle, velocity and outputs at the step's end."""
+    s.bristle_deflection = advance_bristle(p, s.bristle_deflection, velocity, control_step)
+    s.velocity = velocity
+    finish_outputs(p, s, s.position, control_step, out)
+    if friction_output:
+        out.friction_force = friction_of(p, velocity, s.bristle_deflection)
+
+
+@compiled(inline=True)
+def begin_step(params, state, commands, supply, outputs, work):
     """Set up N actuators' control step (:func:`pneumaquad.core.pneumatics.begin_control_step`).
 
-    ``supply`` holds one record that all share, or one per actuator. Returns the step's
-    work records (:data:`pneumaquad.core.layout.STEP_WORK_DTYPE`), one per actuator: its
-    target voltage, supply pressure, valve connections and flow constants, and the mass
+    ``supply`` holds one record that all share, or one per actuator. Fills the step's
+    work records ``work`` (:data:`pneumaquad.core.layout.STEP_WORK_DTYPE`), one per
+    actuator: its target voltage, supply pressure and valve connections, and the mass
     drawn so far (zero).
     """
     count = params.shape[0]
     shared = supply.shape[0] == 1
-    work = np.empty(count, STEP_WORK_DTYPE)
     for index in range(count):
         p = params[index]
         w = work[index]
@@ -160,7 +193,6 @@ def begin_step(params, state, commands, supply, outputs):
         w.supply_pressure = supply_pressure
         keep_connections(w, connections)
         w.drawn_mass = 0.0
-    return work
 
 
 @compiled(inline=True)
@@ -296,9 +328,21 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
     with the new pressures (:func:`rig_mechanics_substep`). In spacer mode the piston
     stays at full extension and the end-stop force is the load the spacer carries.
     """
+    advance_rigs(params, state, commands, control_step, substeps, supply, outputs,
+                 np.empty(params.shape[0], STEP_WORK_DTYPE))
+
+
+@compiled(inline=True)
+def advance_rigs(params, state, commands, control_step, substeps, supply, outputs, work):
+    """:func:`step_rigs` in the work records ``work`` (as :func:`advance_actuators`)."""
     count = params.shape[0]
+    if count == 1:  # nothing to interleave: its set-up stays in registers
+        drawn = advance_one_rig(params[0], state[0], outputs[0], commands[0], supply[0],
+                                control_step, substeps)
+        draw_from_tank(supply[0], drawn)
+        return
     h = control_step / substeps
-    work = begin_step(params, state, commands, supply, outputs)
+    begin_step(params, state, commands, supply, outputs, work)
     for _ in range(substeps):
         for index in range(0, count, 2):  # two at a time, as in advance_actuators
             paired = index + 1 < count
@@ -320,16 +364,42 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
             if paired and q.spacer == 0:
                 rig_mechanics_substep(q, other, h, outputs[index + 1])
     for index in range(count):
-        p = params[index]
-        s = state[index]
-        out = outputs[index]
-        finish_outputs(p, s, s.position, control_step, out)
-        if p.spacer != 0:
-            s.position = p.stroke
-            s.velocity = 0.0
-            out.friction_force = 0.0
-            out.end_stop_force = -(out.pneumatic_force + p.gravity_force)
+        finish_rig(params[index], state[index], outputs[index], control_step)
     finish_step(work, supply)
+
+
+@compiled(inline=True)
+def advance_one_rig(p, s, out, command, supply_record, control_step, substeps):
+    """:func:`advance_rigs` of one rig, substep after substep; returns the mass drawn from
+    the supply [kg] (not yet drawn from ``supply_record``)."""
+    h = control_step / substeps
+    target, lagging, supply_pressure, connections = begin_control_step(
+        p, s, out, command, supply_record
+    )
+    constants = flow_constants(p)
+    spacer = p.spacer != 0
+    drawn = 0.0
+    for _ in range(substeps):
+        connections = substep_connections(
+            p, s, target, lagging, supply_pressure, connections, h
+        )
+        drawn += heun_pneumatics(p, constants, s, s.position, s.velocity, h, connections, out)
+        if not spacer:
+            rig_mechanics_substep(p, s, h, out)
+    finish_rig(p, s, out, control_step)
+    return drawn
+
+
+@compiled(inline=True)
+def finish_rig(p, s, out, control_step):
+    """A rig's outputs at the step's end; in spacer mode the piston held at full extension
+    and the end-stop force the load the spacer carries."""
+    finish_outputs(p, s, s.position, control_step, out)
+    if p.spacer != 0:
+        s.position = p.stroke
+        s.velocity = 0.0
+        out.friction_force = 0.0
+        out.end_stop_force = -(out.pneumatic_force + p.gravity_force)
 
 
 @compiled

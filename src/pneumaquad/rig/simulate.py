@@ -25,7 +25,7 @@ import numpy as np
 from pneumaquad.core.bank import ActuatorArrays, ControllerArrays, scaled_pid_update
 from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update
 from pneumaquad.core.jit import compiled
-from pneumaquad.core.kernel import step_rigs
+from pneumaquad.core.kernel import advance_rigs
 from pneumaquad.io.interruption import deferred_interrupt
 from pneumaquad.io.run_folder import RunRecorder
 from pneumaquad.io.stage_clock import StageClock
@@ -110,7 +110,7 @@ def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
     start_positions : ndarray (N,)
         Piston position of each rig at t = 0 [m] (what a delayed PID sees first).
     """
-    params, state, supply, outputs = actuators
+    params, state, supply, outputs, work = actuators
     commands, references = controllers.commands, controllers.references
     rigs = params.shape[0]
     shared = supply.shape[0] == 1
@@ -132,7 +132,7 @@ def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
                                                     control_step, scaled)
             else:
                 commands[i] = signals[i, k]
-        step_rigs(params, state, commands, control_step, substeps, supply, outputs)
+        advance_rigs(params, state, commands, control_step, substeps, supply, outputs, work)
         for i in range(rigs):
             reference = references[i] if closed_loop else math.nan
             write_row(records[i], k, (k + 1) * control_step, commands[i], reference,

@@ -25,6 +25,9 @@ EXP_UNDERFLOW = 746.0
 #: Stribeck exponent (|v|/vS)^i is below 2^-55 (for i > 0), and exp(-x) of any x below
 #: 2^-54 rounds to exactly 1.0.
 STRIBECK_FLAT_BINADE = -55.0
+#: Above this |v|/vS the test above holds only for exponents beyond 11 (the parameter
+#: files allow up to 10), so a moving piston skips it with one comparison.
+STRIBECK_FLAT_RATIO = 2.0**-5
 #: tanh(x) is exactly ±1.0 in double precision beyond this [-] (from x = 19.06 on; the
 #: C library returns ±1 outright above 22).
 TANH_SATURATION = 22.0
@@ -69,7 +72,9 @@ def stribeck_curve(
         g(v) [N], between Fc and Fs.
     """
     ratio = abs(velocity) / stribeck_velocity
-    if ratio == 0.0 or math.frexp(ratio)[1] * stribeck_exponent <= STRIBECK_FLAT_BINADE:
+    if ratio < STRIBECK_FLAT_RATIO and (
+        ratio == 0.0 or math.frexp(ratio)[1] * stribeck_exponent <= STRIBECK_FLAT_BINADE
+    ):
         # (|v|/vS)^i < 2^-55, so exp(-(|v|/vS)^i) is exactly 1.0: the same value without
         # the power and the exponential (a piston at rest, most of a held position)
         return coulomb_force + (static_force - coulomb_force)
