@@ -100,7 +100,6 @@ def test_named_views_are_the_arrays_they_name() -> None:
         "tendon_damping": model.tendon_damping,
         "tendon_ids": simulation.robot.tendon_id, "actuator_ids": simulation.robot.actuator_id,
         "settings": simulation.joint_control,
-        "work": simulation.bank.work,  # the kernel's own, not the simulation's
     }
     bundles = (simulation.mujoco, simulation.cylinders, simulation.actuators,
                simulation.controllers, simulation.trace)
@@ -234,6 +233,8 @@ def _expected_parameters(setup: RigSetup) -> dict[str, object]:
         "laminar_root": pytest.approx(
             math.sqrt(1 - valve.laminar_pressure_ratio ** ((k - 1) / k)), rel=1e-10),
         "supply_temperature_root": math.sqrt(gas.supply_temperature),
+        "stribeck_flat_velocity": pytest.approx(
+            friction.stribeck_velocity * 2 ** (-56 / friction.stribeck_exponent), rel=1e-15),
         "supply_pressure": a.supply.supply_pressure,
         "exhaust_pressure": a.supply.exhaust_pressure,
         "cap_area": cylinder.cap_area,

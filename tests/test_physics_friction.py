@@ -12,6 +12,7 @@ from pneumaquad.core.physics.friction import (
     friction_damping,
     saturating_tanh,
     stribeck_curve,
+    stribeck_flat_velocity,
     stribeck_tanh_force,
     stribeck_tanh_force_and_slope,
 )
@@ -38,18 +39,37 @@ def test_stribeck_curve_skips_only_an_exact_zero() -> None:
         assert stribeck_curve(v, fs, fc, vs, i) == fc + (fs - fc) * math.exp(-((abs(v) / vs) ** i))
 
 
-def test_stribeck_curve_of_a_piston_nearly_at_rest_is_the_plain_law_bit_for_bit() -> None:
-    """Below the velocity where (|v|/vS)^i < 2^-55 the curve skips the power and the
-    exponential; its value is still the plain law's, for any exponent, on both sides of
-    that velocity and down to the smallest velocities."""
+def test_below_the_flat_velocity_the_curve_is_fs_bit_for_bit() -> None:
+    """Below stribeck_flat_velocity the Stribeck curve is exactly Fc + (Fs - Fc), for any
+    exponent, down to the smallest velocities: the kernels' shortcut there
+    (pneumatics.friction_and_slope_of) changes no value."""
     fs, fc, _, vs, _, _ = LAW
     tiny = np.concatenate([np.geomspace(1e-300, 1e-3, 6001), [5e-324, 1e-320, 1e-310]])
     for exponent in (0.3, 0.5, 1.0, 2.0, 2.5, 5.0, 10.0):
-        edge = vs * 2.0 ** (-55.0 / exponent)  # about where the shortcut ends
-        for v in np.concatenate([tiny, edge * np.linspace(0.25, 4.0, 1501)]):
-            plain = fc + (fs - fc) * math.exp(-((abs(v) / vs) ** exponent))
-            assert stribeck_curve(v, fs, fc, vs, exponent) == plain, (exponent, v)
-            assert stribeck_curve(-v, fs, fc, vs, exponent) == plain, (exponent, -v)
+        flat = stribeck_flat_velocity(vs, exponent)
+        for v in np.concatenate([tiny, flat * np.linspace(0.25, 1.0, 1501)]):
+            if abs(v) >= flat:
+                continue
+            assert stribeck_curve(v, fs, fc, vs, exponent) == fc + (fs - fc), (exponent, v)
+            assert stribeck_curve(-v, fs, fc, vs, exponent) == fc + (fs - fc), (exponent, v)
+
+
+def test_the_kernels_friction_is_the_law_bit_for_bit_around_the_flat_velocity() -> None:
+    """The kernels' Stribeck-tanh force and slope (which skip the curve's power and
+    exponential below the packed flat velocity) equal the law's on both sides of it."""
+    from pneumaquad.core.actuator import pack_parameters
+    from pneumaquad.core.pneumatics import friction_and_slope_of
+    from pneumaquad.params import load_actuator
+
+    for exponent in (1.0, 5.0, 10.0):
+        p = pack_parameters(load_actuator("thesis-rig", [f"friction.stribeck_exponent={exponent}"]))
+        law = (p["static_force"], p["coulomb_force"], p["viscous_coefficient"],
+               p["stribeck_velocity"], p["stribeck_exponent"], p["tanh_coefficient"])
+        flat = p["stribeck_flat_velocity"]
+        for v in np.concatenate([[0.0, 5e-324], flat * np.geomspace(1e-6, 1e3, 2001)]):
+            for signed in (v, -v):
+                assert friction_and_slope_of(p, signed, 0.0) == \
+                    stribeck_tanh_force_and_slope(signed, *law), (exponent, signed)
 
 
 def test_force_equals_the_plain_law_and_the_combined_form() -> None:

@@ -19,6 +19,7 @@ from pneumaquad.core.physics.friction import (
     FRICTION_LUGRE,
     FRICTION_STRIBECK_TANH,
     FRICTION_VISCOUS,
+    stribeck_flat_velocity,
 )
 from pneumaquad.core.physics.orifice import orifice_coefficients
 from pneumaquad.core.pneumatics import FlowConstants, derived_flow_constants
@@ -135,6 +136,8 @@ def pack_parameters(actuator: ActuatorParameters, out: np.void | None = None) ->
     record["viscous_coefficient"] = friction.viscous_coefficient
     record["stribeck_velocity"] = friction.stribeck_velocity
     record["stribeck_exponent"] = friction.stribeck_exponent
+    record["stribeck_flat_velocity"] = stribeck_flat_velocity(
+        friction.stribeck_velocity, friction.stribeck_exponent)
     record["tanh_coefficient"] = friction.tanh_coefficient
     record["damping_coefficient"] = friction.damping_coefficient
     record["bristle_stiffness"] = friction.bristle_stiffness

@@ -50,7 +50,6 @@ from pneumaquad.core.layout import (
     ACTUATOR_PARAMETERS_DTYPE,
     ACTUATOR_STATE_DTYPE,
     RIG_PARAMETER_FIELDS,
-    STEP_WORK_DTYPE,
     SUPPLY_TANK,
 )
 from pneumaquad.params import ActuatorParameters, ControllerParameters, ParameterError, Problem
@@ -83,7 +82,6 @@ class ActuatorArrays(NamedTuple):
     state: np.ndarray  # (N,) ACTUATOR_STATE_DTYPE
     supply: np.ndarray  # (1,) SUPPLY_DTYPE shared, or (N,) one per actuator
     outputs: np.ndarray  # (N,) ACTUATOR_OUTPUT_DTYPE
-    work: np.ndarray  # (N,) STEP_WORK_DTYPE: what a control step keeps between substeps
 
 
 class ControllerArrays(NamedTuple):
@@ -188,12 +186,9 @@ class ActuatorBank:
         self.references = np.zeros(n)
         self.open_loop_voltage = self.params["offset_voltage"].copy()
         self.commands = self.params["offset_voltage"].copy()
-        #: What the kernel's control step keeps between its substeps (kernel-internal).
-        self.work = np.zeros(n, STEP_WORK_DTYPE)
         #: The kernel's bundle of this bank's arrays (the same memory).
         self.actuator_arrays = ActuatorArrays(params=self.params, state=self.state,
-                                              supply=self.supply, outputs=self.outputs,
-                                              work=self.work)
+                                              supply=self.supply, outputs=self.outputs)
         #: The controllers' bundle of this bank's arrays (the same memory).
         self.controller_arrays = ControllerArrays(
             gains=self.gains, gain_scale=self.gain_scale, pid_state=self.pid_state,

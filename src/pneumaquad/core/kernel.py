@@ -83,18 +83,22 @@ def step_actuators(
         Filled with mean flows, end-of-step forces (pneumatic and friction, the latter at
         the given velocity) and temperatures.
     """
+    if params.shape[0] == 1:  # nothing to interleave: its set-up stays in registers
+        drawn = advance_one_actuator(params[0], state[0], outputs[0], commands[0],
+                                     positions[0], velocities[0], supply[0], control_step,
+                                     substeps, True)
+        draw_from_tank(supply[0], drawn)
+        return
     advance_actuators(params, state, commands, positions, velocities, control_step, substeps,
-                      supply, outputs, True, np.empty(params.shape[0], STEP_WORK_DTYPE))
+                      supply, outputs, True)
 
 
 @compiled(inline=True)
 def advance_actuators(
     params, state, commands, positions, velocities, control_step, substeps, supply, outputs,
-    friction_output, work,
+    friction_output,
 ):
-    """:func:`step_actuators`, with the friction force output optional, in the work
-    records ``work`` ((N,) of :data:`pneumaquad.core.layout.STEP_WORK_DTYPE`, overwritten;
-    a caller that steps often keeps one array instead of allocating it every step).
+    """:func:`step_actuators`, with the friction force output optional.
 
     With ``friction_output`` False, ``outputs.friction_force`` is left at zero and the
     friction law (a Stribeck curve and a tanh per actuator) is not evaluated: the robot's
@@ -106,13 +110,11 @@ def advance_actuators(
     step's start.
     """
     count = params.shape[0]
-    if count == 1:  # nothing to interleave: its set-up stays in registers
-        drawn = advance_one_actuator(params[0], state[0], outputs[0], commands[0],
-                                     positions[0], velocities[0], supply[0], control_step,
-                                     substeps, friction_output)
-        draw_from_tank(supply[0], drawn)
-        return
     h = control_step / substeps
+    # allocated here, not kept in the bank: numba types an array of records slowly when a
+    # Python call hands it over (about 18 us for this one per chunk of a walk), and the
+    # allocation costs tens of nanoseconds
+    work = np.empty(count, STEP_WORK_DTYPE)
     begin_step(params, state, commands, supply, outputs, work)
     for index in range(count):
         state[index].position = positions[index]
@@ -334,7 +336,9 @@ def step_rigs(params, state, commands, control_step, substeps, supply, outputs):
 
 @compiled(inline=True)
 def advance_rigs(params, state, commands, control_step, substeps, supply, outputs, work):
-    """:func:`step_rigs` in the work records ``work`` (as :func:`advance_actuators`)."""
+    """:func:`step_rigs` in the work records ``work`` ((N,) of
+    :data:`pneumaquad.core.layout.STEP_WORK_DTYPE`, overwritten: a loop over control steps
+    allocates it once)."""
     count = params.shape[0]
     if count == 1:  # nothing to interleave: its set-up stays in registers
         drawn = advance_one_rig(params[0], state[0], outputs[0], commands[0], supply[0],

@@ -119,6 +119,7 @@ ACTUATOR_PARAMETERS_DTYPE = np.dtype([
     ("viscous_coefficient", "f8"),  # Cv [N s/m]
     ("stribeck_velocity", "f8"),  # vS [m/s]
     ("stribeck_exponent", "f8"),  # [-]
+    ("stribeck_flat_velocity", "f8"),  # below it g(v) is exactly Fs [m/s] (derived)
     ("tanh_coefficient", "f8"),  # [s/m]
     ("damping_coefficient", "f8"),  # viscous model [N s/m]
     ("bristle_stiffness", "f8"),  # LuGre sigma0 [N/m]

@@ -38,7 +38,7 @@ from pneumaquad.core.physics.friction import (
     friction_force,
     lugre_bristle_update,
     stribeck_curve,
-    stribeck_tanh_force_and_slope,
+    stribeck_tanh_force_and_slope_of_curve,
 )
 from pneumaquad.core.physics.orifice import (
     area_to_sonic_conductance,
@@ -459,9 +459,13 @@ def friction_and_slope_of(p, velocity, bristle):
     the Stribeck-tanh law's curve and tanh evaluated once
     (:func:`pneumaquad.core.physics.friction.stribeck_tanh_force_and_slope`)."""
     if p.friction_model == FRICTION_STRIBECK_TANH:
-        return stribeck_tanh_force_and_slope(
-            velocity, p.static_force, p.coulomb_force, p.viscous_coefficient,
-            p.stribeck_velocity, p.stribeck_exponent, p.tanh_coefficient)
+        if abs(velocity) < p.stribeck_flat_velocity:  # g(v) is Fs, bit for bit
+            curve = p.coulomb_force + (p.static_force - p.coulomb_force)
+        else:
+            curve = stribeck_curve(velocity, p.static_force, p.coulomb_force,
+                                   p.stribeck_velocity, p.stribeck_exponent)
+        return stribeck_tanh_force_and_slope_of_curve(
+            curve, velocity, p.viscous_coefficient, p.tanh_coefficient)
     return friction_of(p, velocity, bristle), friction_slope_of(p, velocity, bristle)
 
 

@@ -253,7 +253,7 @@ def simulate_rig_reference(
 
     method = {"radau": "Radau", "lsoda": "LSODA"}.get(setup.simulation.integrator, "Radau")
     bank = rig_bank(setup)
-    params, state, supply, outputs, _ = bank.actuator_arrays
+    params, state, supply, outputs = bank.actuator_arrays
     p = params[0]
     active = _active_states(p)
     y = float_view(state)[0]  # the solver's view of the state record

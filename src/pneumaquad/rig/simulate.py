@@ -26,6 +26,7 @@ from pneumaquad.core.bank import ActuatorArrays, ControllerArrays, scaled_pid_up
 from pneumaquad.core.control.pid import PID_GAINS_DTYPE, pid_update
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.kernel import advance_rigs
+from pneumaquad.core.layout import STEP_WORK_DTYPE
 from pneumaquad.io.interruption import deferred_interrupt
 from pneumaquad.io.run_folder import RunRecorder
 from pneumaquad.io.stage_clock import StageClock
@@ -110,7 +111,8 @@ def run_rig_chunk(actuators: ActuatorArrays, controllers: ControllerArrays,
     start_positions : ndarray (N,)
         Piston position of each rig at t = 0 [m] (what a delayed PID sees first).
     """
-    params, state, supply, outputs, work = actuators
+    params, state, supply, outputs = actuators
+    work = np.empty(params.shape[0], STEP_WORK_DTYPE)
     commands, references = controllers.commands, controllers.references
     rigs = params.shape[0]
     shared = supply.shape[0] == 1

@@ -185,7 +185,7 @@ def sample_actuators(mujoco: MujocoBuffers, cylinders: Cylinders, actuators: Act
             s = state[i]
             s.velocity = (positions[i] - s.position) / dt
         advance_actuators(params, state, trace.commands, state.position, state.velocity, dt,
-                          settings.substeps, actuators.supply, outputs, False, actuators.work)
+                          settings.substeps, actuators.supply, outputs, False)
         coupling[0].pending = 0
     else:
         for i in range(count):

@@ -16,11 +16,9 @@ from __future__ import annotations
 import time
 
 import mujoco
-import numpy as np
 
 from pneumaquad.core.jit import compiled
 from pneumaquad.core.kernel import advance_actuators
-from pneumaquad.core.layout import STEP_WORK_DTYPE
 from pneumaquad.io.stage_clock import StageClock
 
 from .coupling import robot_control_step
@@ -35,10 +33,9 @@ def _kernel_loop(count, params, state, commands, positions, velocities, control_
                  substeps, supply, outputs):
     """``count`` kernel calls on all actuators, as the control step makes them (no
     friction output: the seal friction is MuJoCo's)."""
-    work = np.empty(params.shape[0], STEP_WORK_DTYPE)
     for _ in range(count):
         advance_actuators(params, state, commands, positions, velocities, control_step,
-                          substeps, supply, outputs, False, work)
+                          substeps, supply, outputs, False)
 
 
 @compiled

@@ -21,13 +21,27 @@ FRICTION_LUGRE = 4
 #: exp(-745.13)).
 EXP_UNDERFLOW = 746.0
 
-#: With |v|/vS = m·2^e (0.5 <= m < 1, :func:`math.frexp`) and e·i at most this, the
-#: Stribeck exponent (|v|/vS)^i is below 2^-55 (for i > 0), and exp(-x) of any x below
-#: 2^-54 rounds to exactly 1.0.
-STRIBECK_FLAT_BINADE = -55.0
-#: Above this |v|/vS the test above holds only for exponents beyond 11 (the parameter
-#: files allow up to 10), so a moving piston skips it with one comparison.
-STRIBECK_FLAT_RATIO = 2.0**-5
+
+def stribeck_flat_velocity(stribeck_velocity: float, stribeck_exponent: float) -> float:
+    """Speed [m/s] below which the Stribeck curve is exactly Fs (eq 4.2.6).
+
+    Below vS·2^(-56/i), (|v|/vS)^i is under 2^-55 (with the rounding of the division
+    and the power), and exp(-x) of any x under 2^-54 rounds to exactly 1.0, so g(v) is
+    Fc + (Fs - Fc) bit for bit: a caller that compares |v| with this once-computed speed
+    skips the power and the exponential for a piston at rest (most of a held position).
+    """
+    return stribeck_velocity * 2.0 ** (-56.0 / stribeck_exponent)
+
+
+@compiled
+def stribeck_tanh_force_and_slope_of_curve(
+    curve: float, velocity: float, viscous_coefficient: float, tanh_coefficient: float
+) -> tuple[float, float]:
+    """:func:`stribeck_tanh_force_and_slope` from the Stribeck curve's value g(v) [N]."""
+    t = saturating_tanh(tanh_coefficient * velocity)
+    force = curve * t + viscous_coefficient * velocity
+    slope = curve * tanh_coefficient * (1.0 - t) * (1.0 + t) + viscous_coefficient
+    return force, max(slope, 0.0)
 #: tanh(x) is exactly ±1.0 in double precision beyond this [-] (from x = 19.06 on; the
 #: C library returns ±1 outright above 22).
 TANH_SATURATION = 22.0
@@ -71,14 +85,7 @@ def stribeck_curve(
     float
         g(v) [N], between Fc and Fs.
     """
-    ratio = abs(velocity) / stribeck_velocity
-    if ratio < STRIBECK_FLAT_RATIO and (
-        ratio == 0.0 or math.frexp(ratio)[1] * stribeck_exponent <= STRIBECK_FLAT_BINADE
-    ):
-        # (|v|/vS)^i < 2^-55, so exp(-(|v|/vS)^i) is exactly 1.0: the same value without
-        # the power and the exponential (a piston at rest, most of a held position)
-        return coulomb_force + (static_force - coulomb_force)
-    exponent = ratio**stribeck_exponent
+    exponent = (abs(velocity) / stribeck_velocity) ** stribeck_exponent
     if exponent > EXP_UNDERFLOW:  # exp(-exponent) is exactly 0.0: skip it
         return coulomb_force
     return coulomb_force + (static_force - coulomb_force) * math.exp(-exponent)
@@ -163,10 +170,8 @@ def stribeck_tanh_force_and_slope(
         Friction force [N] and dF/dv clipped at zero [N s/m].
     """
     g = stribeck_curve(velocity, static_force, coulomb_force, stribeck_velocity, stribeck_exponent)
-    t = saturating_tanh(tanh_coefficient * velocity)
-    force = g * t + viscous_coefficient * velocity
-    slope = g * tanh_coefficient * (1.0 - t) * (1.0 + t) + viscous_coefficient
-    return force, max(slope, 0.0)
+    return stribeck_tanh_force_and_slope_of_curve(g, velocity, viscous_coefficient,
+                                                  tanh_coefficient)
 
 
 @compiled
