@@ -1,6 +1,7 @@
 """Object layer over the kernels: packing parameter objects into the named records of
 :mod:`pneumaquad.core.layout`, and initial actuator and supply states."""
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -21,7 +22,7 @@ from pneumaquad.core.physics.friction import (
     FRICTION_VISCOUS,
     stribeck_flat_velocity,
 )
-from pneumaquad.core.physics.orifice import orifice_coefficients
+from pneumaquad.core.physics.orifice import laminar_limit, orifice_coefficients
 from pneumaquad.core.pneumatics import FlowConstants, derived_flow_constants
 from pneumaquad.params.schema import (
     ActuatorParameters,
@@ -148,10 +149,12 @@ def pack_parameters(actuator: ActuatorParameters, out: np.void | None = None) ->
     record["wall_temperature"] = thermo.wall_temperature
     constants = derived_flow_constants(
         gas.heat_capacity_ratio, gas.gas_constant, gas.specific_heat_cp,
-        gas.supply_temperature, record["thermo_model"], thermo.polytropic_exponent,
-        valve.laminar_pressure_ratio)
+        record["thermo_model"], thermo.polytropic_exponent)
     for field, value in zip(FlowConstants._fields, constants, strict=True):
         record[field] = value
+    record["laminar_power"], record["laminar_root"] = laminar_limit(
+        valve.laminar_pressure_ratio, constants.inverse_heat_capacity_ratio)
+    record["supply_temperature_root"] = math.sqrt(gas.supply_temperature)
     for field in layout.RIG_PARAMETER_FIELDS:  # not a rig: pack_rig_parameters sets them
         record[field] = 0
     return record

@@ -64,7 +64,8 @@ ACTUATOR_PARAMETERS_DTYPE = np.dtype([
     ("unchoked_flow_constant", "f8"),  # C1 of eq 4.1.8 [sqrt(kg K/J)]
     ("choked_flow_constant", "f8"),  # C2 of eq 4.1.9 [sqrt(kg K/J)]
     # derived from the gas, the thermodynamic model and the laminar ratio when packed
-    # (pneumatics.flow_constants reads them; none changes after packing)
+    # (pneumatics.flow_constants reads the first three, pneumatics.port_flow the others;
+    # none changes after packing)
     ("inverse_heat_capacity_ratio", "f8"),  # 1/k of eq 4.1.5 [-]
     ("flow_coefficient", "f8"),  # k, or n (polytropic), of eq 4.1.10 [-]
     ("compression_exponent", "f8"),  # k*R/cp + 1, or n, of eq 4.1.10 [-]
