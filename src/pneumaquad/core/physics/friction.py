@@ -21,6 +21,22 @@ FRICTION_LUGRE = 4
 #: exp(-745.13)).
 EXP_UNDERFLOW = 746.0
 
+#: tanh(x) is exactly ±1.0 in double precision beyond this [-] (from x = 19.06 on; the
+#: C library returns ±1 outright above 22).
+TANH_SATURATION = 22.0
+
+
+@compiled
+def saturating_tanh(x: float) -> float:
+    """tanh(x) [-], returning ±1.0 without the call where it is exactly that
+    (|x| > :data:`TANH_SATURATION`): the same value, bit for bit, cheaper for a piston
+    that moves."""
+    if x > TANH_SATURATION:
+        return 1.0
+    if x < -TANH_SATURATION:
+        return -1.0
+    return math.tanh(x)
+
 
 def stribeck_flat_velocity(stribeck_velocity: float, stribeck_exponent: float) -> float:
     """Speed [m/s] below which the Stribeck curve is exactly Fs (eq 4.2.6).
@@ -42,21 +58,6 @@ def stribeck_tanh_force_and_slope_of_curve(
     force = curve * t + viscous_coefficient * velocity
     slope = curve * tanh_coefficient * (1.0 - t) * (1.0 + t) + viscous_coefficient
     return force, max(slope, 0.0)
-#: tanh(x) is exactly ±1.0 in double precision beyond this [-] (from x = 19.06 on; the
-#: C library returns ±1 outright above 22).
-TANH_SATURATION = 22.0
-
-
-@compiled
-def saturating_tanh(x: float) -> float:
-    """tanh(x) [-], returning ±1.0 without the call where it is exactly that
-    (|x| > :data:`TANH_SATURATION`): the same value, bit for bit, cheaper for a piston
-    that moves."""
-    if x > TANH_SATURATION:
-        return 1.0
-    if x < -TANH_SATURATION:
-        return -1.0
-    return math.tanh(x)
 
 
 @compiled
