@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import csv
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pytest
 
 from pneumaquad.io.run_folder import (
@@ -15,6 +18,7 @@ from pneumaquad.io.run_folder import (
     create_run_folder,
     read_recording,
 )
+from pneumaquad.io.tables import float64_array
 from pneumaquad.reporting import plotting
 
 COLUMNS = ["time [s]", "position [m]", "cap pressure [Pa]"]
@@ -237,3 +241,27 @@ def test_row_buffer_writes_a_row_that_waited_too_long(tmp_path: Path) -> None:
         rows.row()[:] = _block(1, 1)[0]
         rows.commit()  # the first row has waited longer than max_delay: both go out
         assert recorder.rows_written == 2
+
+
+def test_float64_array_views_the_values_with_nan_as_a_value() -> None:
+    values = np.array([1.5, np.nan, -np.inf, 0.1])
+    array = float64_array(values[::1])
+    assert array.type == pa.float64()
+    assert array.null_count == 0
+    np.testing.assert_array_equal(array.to_numpy(), values)
+    strided = float64_array(np.arange(6.0)[::2])  # copied to a contiguous buffer
+    np.testing.assert_array_equal(strided.to_numpy(), [0.0, 2.0, 4.0])
+    with pytest.raises(ValueError, match="1-D"):
+        float64_array(np.zeros((2, 2)))
+
+
+def test_writing_a_table_does_not_import_pandas(tmp_path: Path) -> None:
+    """Arrow's pa.array imports pandas on its first call (about 0.2 s, which a run's first
+    recorded block would wait on); the tables are built without it."""
+    code = ("import sys, numpy as np; from pneumaquad.io.tables import StreamedTable; "
+            f"t = StreamedTable({str(tmp_path / 'a.csv')!r}, {str(tmp_path / 'a.parquet')!r}, "
+            "['time [s]', 'x [m]'], background=True); t.append(np.ones((3, 2))); t.close(); "
+            "print('pandas' in sys.modules)")
+    loaded = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                            text=True).stdout.strip()
+    assert loaded == "False"

@@ -35,10 +35,23 @@ import pyarrow as pa
 import pyarrow.csv as pa_csv
 import pyarrow.parquet as pq
 
-__all__ = ["RowBuffer", "StreamedTable", "TableMetadata", "quantity_and_unit", "read_table",
-           "read_table_metadata"]
+__all__ = ["RowBuffer", "StreamedTable", "TableMetadata", "float64_array", "quantity_and_unit",
+           "read_table", "read_table_metadata"]
 
 _NAMED = re.compile(r"^(?P<quantity>.*\S)\s*\[(?P<unit>[^\[\]]*)\]$")
+
+
+def float64_array(values: np.ndarray) -> pa.Array:
+    """An Arrow float64 array viewing ``values`` (1-D; copied only if not contiguous).
+
+    Built from the buffer, without ``pa.array``'s checks for pandas objects: the first of
+    those imports pandas (about 0.2 s), which a run's first recorded block would wait on.
+    NaN stays a value (not null), as with ``pa.array``.
+    """
+    data = np.ascontiguousarray(values, dtype=np.float64)
+    if data.ndim != 1:
+        raise ValueError(f"expected a 1-D array, got shape {data.shape}")
+    return pa.Array.from_buffers(pa.float64(), data.shape[0], [None, pa.py_buffer(data)])
 
 
 def quantity_and_unit(column: str) -> tuple[str, str]:
@@ -150,7 +163,8 @@ class StreamedTable:
 
     def _write_block(self, by_column: np.ndarray) -> None:
         """Format one block (one array per column) into the CSV file."""
-        self._csv_writer.write_table(pa.Table.from_arrays(list(by_column), schema=self._schema))
+        columns = [float64_array(values) for values in by_column]
+        self._csv_writer.write_table(pa.Table.from_arrays(columns, schema=self._schema))
 
     def to_arrays(self) -> dict[str, np.ndarray]:
         """All rows appended so far, one float64 array per column."""
@@ -181,8 +195,8 @@ class StreamedTable:
                                    metadata={"quantity": quantity, "unit": unit}))
         extra = self.metadata() if callable(self.metadata) else (self.metadata or {})
         schema = pa.schema(fields, metadata={str(k): str(v) for k, v in extra.items()})
-        table = pa.table([pa.array(values, type=pa.float64()) for values in arrays.values()],
-                         schema=schema)
+        table = pa.Table.from_arrays([float64_array(values) for values in arrays.values()],
+                                     schema=schema)
         # Dictionary encoding buys nothing on float samples and costs most of the time.
         pq.write_table(table, self.parquet_path, use_dictionary=False)
         if failure is not None:  # the Parquet file holds every row even then
