@@ -167,11 +167,16 @@ class StreamedTable:
         self._csv_writer.write_table(pa.Table.from_arrays(columns, schema=self._schema))
 
     def to_arrays(self) -> dict[str, np.ndarray]:
-        """All rows appended so far, one float64 array per column."""
+        """All rows appended so far, one float64 array per column: read-only views of
+        the table's rows (the blocks are joined once and kept joined, so the run that
+        reads its recording and the Parquet file written on close share one copy)."""
+        if len(self._blocks) > 1:
+            self._blocks = [np.concatenate(self._blocks, axis=1)]
         if self._blocks:
-            by_column = np.concatenate(self._blocks, axis=1)
+            by_column = self._blocks[0].view()
         else:
             by_column = np.empty((len(self.columns), 0))
+        by_column.flags.writeable = False
         return dict(zip(self.columns, by_column, strict=True))
 
     def close(self) -> None:
