@@ -36,9 +36,12 @@ from typing import Any
 
 import mujoco
 import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pa_csv
 
 from _bench import Stats, machine_line, stats, table, write_json
 from pneumaquad.io.run_folder import RunFolderWriter
+from pneumaquad.io.tables import float64_array
 from pneumaquad.params import load_rig, load_robot
 from pneumaquad.rig.signals import sine
 from pneumaquad.rig.simulate import RIG_COLUMNS, simulate_rig
@@ -64,10 +67,25 @@ def background_recorder(writer: RunFolderWriter) -> Any:
         return writer.recorder(RIG_COLUMNS)
 
 
-def time_rig_in_process(repeats: int, duration: float) -> tuple[Stats, Stats, Stats]:
-    """Warm-process seconds of the bare kernel, of the run with its recording written and
-    of writing that recording alone (CSV blocks of 500 rows and the Parquet file, in this
-    thread), interleaved."""
+def csv_formatting_seconds(rows: np.ndarray, repeats: int) -> Stats:
+    """Seconds Arrow's CSV writer takes to format ``rows`` (one table, into memory): the
+    part of writing a recording that no overlap with the simulation can remove."""
+    table = pa.Table.from_arrays([float64_array(column) for column in rows.T.copy()],
+                                 names=list(RIG_COLUMNS))
+    seconds = []
+    for _ in range(repeats):
+        begun = time.perf_counter()
+        sink = pa.BufferOutputStream()
+        with pa_csv.CSVWriter(sink, table.schema) as writer:
+            writer.write_table(table)
+        seconds.append(time.perf_counter() - begun)
+    return stats(seconds)
+
+
+def time_rig_in_process(repeats: int, duration: float) -> tuple[Stats, Stats, Stats, Stats]:
+    """Warm-process seconds of the bare kernel, of the run with its recording written, of
+    writing that recording alone (CSV blocks of 500 rows and the Parquet file, in this
+    thread), interleaved, and of formatting its CSV alone."""
     setup, reference = rig_reference(duration)
     result = simulate_rig(setup, reference, True)  # load the compiled code
     rows = np.column_stack([result.recording[name] for name in RIG_COLUMNS])
@@ -89,7 +107,7 @@ def time_rig_in_process(repeats: int, duration: float) -> tuple[Stats, Stats, St
                 for start in range(0, rows.shape[0], 500):
                     recorder.append(rows[start:start + 500])
             writing.append(time.perf_counter() - begun)
-    return stats(kernel), stats(run), stats(writing)
+    return stats(kernel), stats(run), stats(writing), csv_formatting_seconds(rows, repeats)
 
 
 #: "--profile", or nothing to time a version of the code that does not have the option
@@ -149,7 +167,7 @@ def main() -> None:
     print(f"end-to-end speed  ({machine_line()})\n")
     figures: dict[str, Any] = {}
 
-    kernel, run, writing = time_rig_in_process(max(args.repeats, 5), 10.0)
+    kernel, run, writing, formatting = time_rig_in_process(max(args.repeats, 5), 10.0)
     with tempfile.TemporaryDirectory(prefix="e2e-cmd-") as folder:
         commands = [run_command(["rig", "track", "sine"], Path(folder) / f"{i}")
                     for i in range(args.repeats)]
@@ -164,6 +182,8 @@ def main() -> None:
          f"{10 / run.median:.0f}", f"{run.median / kernel.median:.2f}"],
         ["  writing the recording alone (CSV, Parquet)", writing.spread(4),
          f"{10 / writing.median:.0f}", f"{writing.median / kernel.median:.2f}"],
+        ["    of which formatting the CSV (Arrow)", formatting.spread(4),
+         f"{10 / formatting.median:.0f}", f"{formatting.median / kernel.median:.2f}"],
         ["run in a fresh command process", fresh_run.spread(4),
          f"{10 / fresh_run.median:.0f}", f"{fresh_run.median / kernel.median:.1f}"],
         ["  command start-up (imports)", start_up.spread(3), "", ""],
@@ -175,6 +195,7 @@ def main() -> None:
           f"it prints it: {10 / fresh_run.median:.0f}x, "
           f"{fresh_run.median / kernel.median:.1f}x\n")
     figures["rig"] = {"kernel_s": kernel, "run_s": run, "writing_s": writing,
+                      "csv_formatting_s": formatting,
                       "fresh_run_s": fresh_run,
                       "process_s": process, "start_up_s": start_up, "plot_s": plot}
     if args.skip_walk:
