@@ -172,10 +172,8 @@ class StreamedTable:
         reads its recording and the Parquet file written on close share one copy)."""
         if len(self._blocks) > 1:
             self._blocks = [np.concatenate(self._blocks, axis=1)]
-        if self._blocks:
-            by_column = self._blocks[0].view()
-        else:
-            by_column = np.empty((len(self.columns), 0))
+        joined = self._blocks[0] if self._blocks else np.empty((len(self.columns), 0))
+        by_column = joined.view()
         by_column.flags.writeable = False
         return dict(zip(self.columns, by_column, strict=True))
 

@@ -25,6 +25,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from pneumaquad.core.jit import load_compiled
 from pneumaquad.gait.crawl import CrawlGait
 from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
 from pneumaquad.robot.legs import leg_dh_table
@@ -112,6 +113,8 @@ class BodyPlacement:
         self._scratch = np.zeros((3, 9))
         self.uphill = np.zeros(3)  # [m] world shift of the body uphill (filtered)
         self.last_time = simulation.time
+        load_compiled(placement_step,
+                      *self._step_arguments(np.zeros((1, robot.joint_count)), 0.0, 0.0))
 
     def __call__(self, times: np.ndarray) -> np.ndarray:
         """Joint references (len(times), joints) [rad] for the next chunk."""
@@ -120,12 +123,15 @@ class BodyPlacement:
             rows = np.array(rows, dtype=float)
         time = self.simulation.time
         interval, self.last_time = time - self.last_time, time
-        singular = placement_step(
-            rows, time - self.start, self.timing, self._site_positions, self._feet,
-            self._centre, self._thorax_matrix, self.uphill,
-            interval / (self.time_constant + interval), self.limit, self.level,
-            self._scratch,
-            self._shifts, self._stacked, self._workspace)
+        singular = placement_step(*self._step_arguments(
+            rows, time - self.start, interval / (self.time_constant + interval)))
         if singular >= 0:
             raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
         return rows
+
+    def _step_arguments(self, rows: np.ndarray, gait_time: float, blend: float) -> tuple:
+        """:func:`.course_kernels.placement_step`'s arguments: ``rows`` to correct, the
+        gait time [s] and the low-pass filter's blend of this call."""
+        return (rows, gait_time, self.timing, self._site_positions, self._feet,
+                self._centre, self._thorax_matrix, self.uphill, blend, self.limit,
+                self.level, self._scratch, self._shifts, self._stacked, self._workspace)

@@ -33,6 +33,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from pneumaquad.core.jit import load_compiled
 from pneumaquad.locomotion.walk import thorax_rotation
 from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
 from pneumaquad.robot.legs import leg_dh_table
@@ -109,6 +110,10 @@ class HeadingHold:
         # heading [rad], heading set (0/1), foot rotation [rad], last call's time [s]
         self._state = np.zeros(4)
         self._state[LAST_TIME] = simulation.time
+        load_compiled(hold_step, *self._hold_arguments(np.zeros((1, robot.joint_count)), 0))
+        if track is not None:
+            load_compiled(cross_track_error, self._thorax_position, track.body[0], 0.0,
+                          track.direction, self._course)
 
     @property
     def heading(self) -> float | None:
@@ -153,18 +158,7 @@ class HeadingHold:
         if self.yaw_rate != 0.0 and self._start is not None:
             heading, start = self._start
             self._state[HEADING] = heading + self.yaw_rate * (self.simulation.time - start)
-        steer = track is not None and self._start is not None and self.yaw_rate == 0.0
-        leak = self.turn_leak if track is not None else 0.0
-        singular = hold_step(
-            rows, self._thorax_matrix, self._nominal, self.to_body, self._stacked,
-            self._workspace, self._matrices, self._state, self.simulation.time, self.gain,
-            self.limit, steer, self._thorax_position,
-            self._no_plan if track is None else track.body[index],
-            0.0 if self._start is None else self._start[0],
-            self._no_plan if track is None else track.direction, self._course,
-            self.course_gain, self.course_limit, leak,
-            self._last_travel if track is None else track.travel[index], self._last_travel,
-            self.leg_turns, self._travel_state)
+        singular = hold_step(*self._hold_arguments(rows, index))
         if singular >= 0:
             raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
         if self._start is None:
@@ -173,3 +167,19 @@ class HeadingHold:
                 cross_track_error(self._thorax_position, track.body[index], self._start[0],
                                   track.direction, self._course)
         return rows
+
+    def _hold_arguments(self, rows: np.ndarray, index: int) -> tuple:
+        """:func:`.course_kernels.hold_step`'s arguments: ``rows`` to correct, ``index``
+        the plan sample of this call (with a track)."""
+        track = self.track
+        steer = track is not None and self._start is not None and self.yaw_rate == 0.0
+        leak = self.turn_leak if track is not None else 0.0
+        return (rows, self._thorax_matrix, self._nominal, self.to_body, self._stacked,
+                self._workspace, self._matrices, self._state, self.simulation.time,
+                self.gain, self.limit, steer, self._thorax_position,
+                self._no_plan if track is None else track.body[index],
+                0.0 if self._start is None else self._start[0],
+                self._no_plan if track is None else track.direction, self._course,
+                self.course_gain, self.course_limit, leak,
+                self._last_travel if track is None else track.travel[index],
+                self._last_travel, self.leg_turns, self._travel_state)

@@ -33,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from pneumaquad.core.jit import load_compiled
 from pneumaquad.gait.crawl import CrawlGait
 from pneumaquad.robot.simulation import RobotSimulation
 
@@ -241,6 +242,7 @@ class StanceController:
         legs = len(self.timing.offsets)
         self._log = np.zeros((64, 1 + 2 * legs))
         self._logged = 0
+        load_compiled(stance_step, *self._step_arguments(0.0, np.zeros(legs), np.zeros(legs)))
 
     @property
     def log(self) -> Array:
@@ -259,13 +261,19 @@ class StanceController:
         time = simulation.time
         row[0] = time
         shares, normal = row[1 : 1 + legs], row[1 + legs :]
-        loaded = stance_step(loads.views, self.timing, time - self.start, settings.rise,
-                             settings.fall, loads.workspace, shares, normal, loads.set_points)
+        loaded = stance_step(*self._step_arguments(time - self.start, shares, normal))
         if loaded < 0:
             loads.fallback_normal_forces(shares, normal)
             loaded = cylinder_forces_into(loads.views, shares, normal, loads.set_points)
         loads.apply(loaded, settings.force_gain, settings.stiffness)
         return normal
+
+    def _step_arguments(self, gait_time: float, shares: Array, normal: Array) -> tuple:
+        """:func:`.stance_kernels.stance_step`'s arguments at ``gait_time`` [s], into
+        ``shares`` and ``normal`` (legs,)."""
+        settings, loads = self.settings, self.loads
+        return (loads.views, self.timing, gait_time, settings.rise, settings.fall,
+                loads.workspace, shares, normal, loads.set_points)
 
     def update(self) -> Array:
         """Set the force set-points for the present state; return the desired normal

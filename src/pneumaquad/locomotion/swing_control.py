@@ -21,6 +21,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from pneumaquad.core.jit import load_compiled
 from pneumaquad.gait.crawl import CrawlGait
 from pneumaquad.robot.kinematics import chain_workspace, stack_leg_tables
 from pneumaquad.robot.legs import leg_dh_table
@@ -82,6 +83,7 @@ class SwingHeightCorrection:
         self._thorax_position = data.xpos[robot.thorax_id]  # ... thorax origin [m]
         self._site_positions = data.site_xpos  # [m]
         self._foot_sites = np.asarray(robot.foot_site_id, dtype=np.int64)
+        load_compiled(swing_step, *self._step_arguments(np.zeros((1, robot.joint_count)), 0.0))
 
     @property
     def last_time(self) -> float:
@@ -96,11 +98,15 @@ class SwingHeightCorrection:
         """Joint references (len(times), joints) [rad] for the next chunk."""
         rows = np.array(self.references(times), dtype=float)
         middle = float(np.asarray(times)[len(times) // 2]) - self.start
-        singular = swing_step(rows, middle, self.simulation.time, self._thorax_matrix,
-                              self._thorax_position, self._site_positions, self._foot_sites,
-                              self._timing, self.lift_off_height, self.was_stance,
-                              self.correction, self._clock, self.limit, self.fade,
-                              self._stacked, self._workspace)
+        singular = swing_step(*self._step_arguments(rows, middle))
         if singular >= 0:
             raise np.linalg.LinAlgError(f"Singular matrix: the Jacobian of leg {singular}")
         return rows
+
+    def _step_arguments(self, rows: np.ndarray, middle: float) -> tuple:
+        """:func:`.feedback_kernels.swing_step`'s arguments: ``rows`` to correct, the
+        chunk's middle [s] in gait time."""
+        return (rows, middle, self.simulation.time, self._thorax_matrix,
+                self._thorax_position, self._site_positions, self._foot_sites, self._timing,
+                self.lift_off_height, self.was_stance, self.correction, self._clock,
+                self.limit, self.fade, self._stacked, self._workspace)
