@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import numba
+import numpy as np
 import pytest
 
 from pneumaquad.core import jit
@@ -108,3 +109,18 @@ def test_old_cache_folders_are_pruned_to_the_most_recently_used(tmp_path):
     left = {path.name for path in tmp_path.iterdir()}
     assert left == {"numba-0", "numba-1", "numba-11", "other"}
     assert {path.name for path in removed} == {f"numba-{k}" for k in range(2, 11)}
+
+
+def test_load_compiled_loads_what_a_call_with_those_types_uses() -> None:
+    from pneumaquad.core.jit import load_compiled
+
+    @compiled
+    def weighted_sum(values, weight):
+        return weight * values.sum()
+
+    load_compiled(weighted_sum, np.zeros(3), 0.0)
+    assert len(weighted_sum.signatures) == 1
+    assert weighted_sum(np.arange(4.0), 0.5) == 3.0
+    assert len(weighted_sum.signatures) == 1  # the call ran the loaded code
+    weighted_sum(np.arange(4), 0.5)  # integers: a second specialisation
+    assert len(weighted_sum.signatures) == 2

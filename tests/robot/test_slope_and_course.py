@@ -197,3 +197,41 @@ def test_level_ground_moves_nothing_and_a_slope_does() -> None:
         assert uphill == pytest.approx(uphill_offset(normal, height), abs=1e-14)
         assert np.linalg.norm(uphill) == pytest.approx(height * math.tan(slope), rel=1e-12)
         assert not np.array_equal(corrected, rows)
+
+
+def test_the_walking_feedback_loads_the_compiled_code_its_calls_use() -> None:
+    """Each feedback object loads its kernel's machine code where it is built
+    (core.jit.load_compiled) for the argument types of its calls: calling it afterwards
+    loads nothing more (a type that differed would add a signature)."""
+    from pneumaquad.locomotion.body_placement import BodyPlacement
+    from pneumaquad.locomotion.course_kernels import (
+        cross_track_error,
+        gait_track,
+        hold_step,
+        placement_step,
+    )
+    from pneumaquad.locomotion.feedback_kernels import swing_step
+    from pneumaquad.locomotion.heading_control import HeadingHold
+    from pneumaquad.locomotion.stance_control import StanceController
+    from pneumaquad.locomotion.stance_kernels import stance_step
+    from pneumaquad.locomotion.swing_control import SwingHeightCorrection
+    from pneumaquad.locomotion.walk import robot_gait
+
+    sim, standing = _standing_simulation()
+    gait = robot_gait(sim.robot, speed=0.02, heading=0.0, duty_factor=0.9, period=8.0,
+                      step_height=0.04, angles=np.radians([0.0, -20.0, 80.0]),
+                      minimum_margin=0.06, lift_fraction=0.25, transfer_gap=0.04,
+                      start_up=True)
+    start = sim.time
+    references = StanceController(sim, gait, start,
+                                  lambda times: np.tile(standing, (len(times), 1)))
+    references = SwingHeightCorrection(sim, gait, start, references)
+    references = BodyPlacement(sim, gait, start, references)
+    references = HeadingHold(sim, references, track=gait_track(gait, start, 8.0))
+    kernels = (stance_step, swing_step, placement_step, hold_step, cross_track_error)
+    loaded = [set(kernel.signatures) for kernel in kernels]
+    assert all(loaded)
+    for _ in range(3):
+        rows = references(sim.time + sim.control_step * np.arange(1, 11))
+        sim.step(10, rows, 0)
+    assert [set(kernel.signatures) for kernel in kernels] == loaded
