@@ -12,13 +12,13 @@ import pytest
 from pydantic import BaseModel
 
 from pneumaquad.params import reference, robot_schema, schema
+from pneumaquad.params.fields import PositiveLength, described
 from pneumaquad.params.reference import (
     REFERENCE_MARKER,
     insert_reference,
     parameter_reference,
     reference_rows,
 )
-from pneumaquad.params.schema import PositiveLength, described
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 

@@ -19,7 +19,7 @@ from pneumaquad.cli import COMMAND_STARTED
 from pneumaquad.io.run_folder import RunFolderWriter
 from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.params import ParameterError, Problem, parse_quantity
-from pneumaquad.params.schema import Bounds
+from pneumaquad.params.fields import Bounds
 
 __all__ = [
     "MAX_CONTROL_STEPS",

@@ -21,7 +21,7 @@ from pneumaquad.cli.common import (
     stderr_console,
 )
 from pneumaquad.io.interruption import deferred_interrupt
-from pneumaquad.params.schema import Bounds
+from pneumaquad.params.fields import Bounds
 
 __all__ = ["console_command", "serve_console"]
 

@@ -41,8 +41,9 @@ from pneumaquad.params import (
     load_rig,
     resolved_parameters_toml,
 )
+from pneumaquad.params.fields import Bounds
 from pneumaquad.params.loader import load_parameter_set
-from pneumaquad.params.schema import Bounds, RigSetup
+from pneumaquad.params.schema import RigSetup
 from pneumaquad.rig import signals
 from pneumaquad.rig.signals import RecordedReferenceError
 from pneumaquad.robot.errors import SimulationDivergedError

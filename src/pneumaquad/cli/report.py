@@ -24,7 +24,7 @@ from pneumaquad.cli.common import (
 )
 from pneumaquad.io.measured import MeasuredDataError
 from pneumaquad.params import ParameterError
-from pneumaquad.params.schema import Bounds
+from pneumaquad.params.fields import Bounds
 from pneumaquad.reporting.run_folder import ReportError
 
 __all__ = ["REPORT_ERRORS", "report_command"]

@@ -50,7 +50,7 @@ from pneumaquad.io.interruption import InterruptCount, counted_interrupts
 from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.locomotion.walk_settings import WALK_SETTINGS, WalkSettings
 from pneumaquad.params import JOINT_NAMES, load_robot
-from pneumaquad.params.schema import Bounds
+from pneumaquad.params.fields import Bounds
 from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.video import (
     DEFAULT_VIDEO_QUALITY,

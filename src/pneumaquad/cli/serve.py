@@ -33,7 +33,7 @@ from pneumaquad.cli.common import (
     stderr_console,
 )
 from pneumaquad.params import ParameterError
-from pneumaquad.params.schema import Bounds
+from pneumaquad.params.fields import Bounds
 
 serve_app = command_group(help="Networked co-simulation over UDP (thesis ch. 5.1-5.3).",
                           no_args_is_help=True)

@@ -34,7 +34,7 @@ from pydantic import BaseModel
 
 from pneumaquad.core.layout import POLYNOMIAL_COEFFICIENTS
 from pneumaquad.params import ActuatorParameters, ParameterError, Problem
-from pneumaquad.params.schema import Bounds, QuantityField
+from pneumaquad.params.fields import Bounds, QuantityField
 
 __all__ = [
     "INPUTS",

@@ -66,8 +66,8 @@ from pneumaquad.interop.fmu_model import (
 )
 from pneumaquad.interop.fmu_runtime import guard_entry_points, release_at_exit
 from pneumaquad.params import ActuatorParameters, ParameterError, Problem, load_actuator
+from pneumaquad.params.fields import AbsolutePressure, ControlStep, StepCount
 from pneumaquad.params.loader import validated_update
-from pneumaquad.params.schema import AbsolutePressure, ControlStep, StepCount
 
 __all__ = ["ActuatorSlave", "FixedParameterError"]
 

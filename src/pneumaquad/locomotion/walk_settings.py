@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass, field
 
 from pneumaquad.gait.settings import CrawlSettings
-from pneumaquad.params.schema import Bounds
+from pneumaquad.params.fields import Bounds
 from pneumaquad.params.settings import Setting, check_settings
 
 __all__ = ["GAIT_FIELDS", "REACH_FIELDS", "TURN_RATE", "TURN_TOLERANCE", "WALK_SETTINGS",

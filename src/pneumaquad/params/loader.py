@@ -18,8 +18,9 @@ import tomli_w
 from pydantic import BaseModel, ValidationError
 
 from .errors import MISSING, ParameterError, Problem
+from .fields import CrossFieldError, QuantityField
 from .robot_schema import RobotParameters
-from .schema import ActuatorParameters, CrossFieldError, QuantityField, RigSetup
+from .schema import ActuatorParameters, RigSetup
 from .units import GaugeError, QuantityError, convert_quantity
 
 __all__ = [

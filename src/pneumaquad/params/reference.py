@@ -26,8 +26,9 @@ from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 from pydantic_core import PydanticUndefined
 
+from .fields import Bounds, NumberField, QuantityField
 from .robot_schema import RobotParameters
-from .schema import ActuatorParameters, Bounds, QuantityField, RigSetup, _NumberField
+from .schema import ActuatorParameters, RigSetup
 
 __all__ = [
     "FILE_KINDS",
@@ -214,7 +215,7 @@ def _type_of(annotation: Any, metadata: Sequence[Any], where: str) -> _Type:
         quantity = next((m for m in markers if isinstance(m, QuantityField)), None)
         if quantity is not None:
             return _Type(pretty_unit(quantity.kind.si_unit), allowed)
-        if any(isinstance(m, _NumberField) for m in markers):
+        if any(isinstance(m, NumberField) for m in markers):
             if bounds is not None and bounds.unit:  # a plain number in a stated unit
                 return _Type(f"{pretty_unit(bounds.unit)} (a plain number)", allowed)
             return _Type("dimensionless", allowed)

@@ -16,29 +16,28 @@ from typing import Annotated, Literal
 from pydantic import StrictBool, StrictInt
 from pydantic import model_validator as _model_validator
 
-from .schema import (
+from .fields import (
     MAX_LENGTH,
     MAX_MASS,
     MAX_TIME_CONSTANT,
     AbsolutePressure,
     Bounds,
-    ControllerParameters,
     ControlStep,
     CrossFieldError,
     Damping,
     Length,
     Mass,
-    Meta,
     NonNegativeLength,
     NonNegativeMass,
     Number,
+    ParameterModel,
     PositiveLength,
     QuantityField,
     StepCount,
     Time,
-    _Model,
     described,
 )
+from .schema import ControllerParameters, Meta
 
 __all__ = [
     "JOINT_NAMES",
@@ -99,7 +98,7 @@ GainScale = Annotated[Number, Bounds(0.0, 100.0, lower_inclusive=True)]
 FrictionCoefficient = Annotated[Number, Bounds(0.0, 10.0, lower_inclusive=True)]
 
 
-class Frame(_Model):
+class Frame(ParameterModel):
     """A rigid transform as SrLib writes it: ``EulerZYX(Vec3(a, b, c), Vec3(x, y, z))``.
 
     ``rotation_zyx`` = (a, b, c) [rad] gives R = Rz(a)·Ry(b)·Rx(c); ``position`` [m].
@@ -113,7 +112,7 @@ class Frame(_Model):
         "App. C.2 listings (`EulerZYX(..., Vec3(x, y, z))`)")
 
 
-class LinkParameters(_Model):
+class LinkParameters(ParameterModel):
     """A capsule link (SrLib ``SetDimension(diameter, length)``, ``UpdateInertia(density)``).
 
     ``length`` is the cylindrical part along the link's z axis; the hemispherical caps
@@ -151,7 +150,7 @@ class LinkParameters(_Model):
         default=(0.7, 0.7, 0.7))
 
 
-class JointParameters(_Model):
+class JointParameters(ParameterModel):
     """A revolute joint: its frame in the parent and in the child link, limits [rad]."""
 
     parent_frame: Frame | None = described(
@@ -183,7 +182,7 @@ class JointParameters(_Model):
         return self
 
 
-class LegParameters(_Model):
+class LegParameters(ParameterModel):
     """Link frames of one leg (App. C.2.1): coxa (two capsules welded), femur, tibia."""
 
     coxa_weld_parent_frame: Frame = described(
@@ -203,7 +202,7 @@ class LegParameters(_Model):
         "App. C.2.1; thesis 3.1 (Table 1)")
 
 
-class LinkageParameters(_Model):
+class LinkageParameters(ParameterModel):
     """Cylinder between two pivots of a joint (thesis Fig. 34–36, eq 5.2.1–5.2.6).
 
     The barrel pivot sits on the parent link at ``parent_pivot_radius`` (l3) from the joint
@@ -266,7 +265,7 @@ class LinkageParameters(_Model):
         return self
 
 
-class CylinderMounting(_Model):
+class CylinderMounting(ParameterModel):
     """Which actuator parameter set drives each joint type, and the robot's shared supply.
 
     ``supply_pressure`` [Pa absolute], when given, is the regulated supply of every
@@ -342,7 +341,7 @@ class JointControllerParameters(ControllerParameters):
         default=0.05)
 
 
-class RobotControllerParameters(_Model):
+class RobotControllerParameters(ParameterModel):
     """Joint controllers per joint type, and stance/swing gain scales for scheduling."""
 
     alpha: JointControllerParameters = described(
@@ -364,7 +363,7 @@ class RobotControllerParameters(_Model):
         default=1.0)
 
 
-class ContactParameters(_Model):
+class ContactParameters(ParameterModel):
     """Friction coefficients (SrLib ``SetFriction``, App. C.2) and MuJoCo contact softness."""
 
     ground_friction: FrictionCoefficient = described(
@@ -401,7 +400,7 @@ class ContactParameters(_Model):
         default="elliptic")
 
 
-class EnvironmentParameters(_Model):
+class EnvironmentParameters(ParameterModel):
     """Obstacles: block, ramp (App. C.2.3: 1.2 × 1.2 × 0.019 m), rough-terrain field."""
 
     block_size: tuple[EnvironmentLength, EnvironmentLength, EnvironmentLength] = described(
@@ -450,7 +449,7 @@ class EnvironmentParameters(_Model):
         default=0.5)
 
 
-class TestbedParameters(_Model):
+class TestbedParameters(ParameterModel):
     """Two-legged testbed (thesis 3.1.2): the rear of the body rolls on passive wheels.
 
     Two wheels on one axle under the rear end of the thorax, free to spin; the axle hangs
@@ -474,7 +473,7 @@ class TestbedParameters(_Model):
         "thesis 3.1.2; not in thesis: sizes")
 
 
-class RobotSimulationParameters(_Model):
+class RobotSimulationParameters(ParameterModel):
     """Coupled-simulation settings.
 
     ``control_step`` [s] is the period of the controllers and of the pneumatic kernel
@@ -555,7 +554,7 @@ class RobotSimulationParameters(_Model):
         default=10)
 
 
-class RobotParameters(_Model):
+class RobotParameters(ParameterModel):
     """A complete robot parameter set (see module docstring)."""
 
     meta: Meta = described(

@@ -12,12 +12,49 @@ import math
 from functools import cached_property
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt, field_validator
+from pydantic import StrictBool, field_validator
 from pydantic import model_validator as _model_validator
-from pydantic_core import PydanticUndefined, core_schema
 
 from .errors import MISSING
-from .units import KINDS, Kind, QuantityError, convert_quantity
+from .fields import (
+    MAX_FORCE,
+    MAX_GRAVITY,
+    MAX_VOLTAGE,
+    AbsolutePressure,
+    Acceleration,
+    Area,
+    BoundedVoltage,
+    Bounds,
+    Conductance,
+    ControlStep,
+    CrossFieldError,
+    Damping,
+    Force,
+    HeatTransfer,
+    InverseVelocity,
+    NonNegativeLength,
+    NonNegativeMass,
+    Number,
+    OpenFraction,
+    ParameterModel,
+    Polynomial,
+    PositiveLength,
+    QuantityField,
+    SpecificHeat,
+    StepCount,
+    Stiffness,
+    Temperature,
+    Time,
+    TimeConstant,
+    Velocity,
+    Voltage,
+    Volume,
+    described,
+    non_negative_bounds,
+    not_bool,
+    positive_bounds,
+)
+from .units import QuantityError, convert_quantity
 
 __all__ = [
     "ActuatorParameters",
@@ -39,265 +76,6 @@ __all__ = [
 ]
 
 
-class CrossFieldError(ValueError):
-    """Problems found by a model-level check: ``(sub_key, value, expected)`` triples."""
-
-    def __init__(self, items: list[tuple[str, Any, str]]) -> None:
-        self.items = items
-        super().__init__("; ".join(f"{k}: {v!r} {m}" for k, v, m in items))
-
-
-class QuantityField:
-    """Annotation marker: a dimensional float stored in SI, parsed from a unit string."""
-
-    def __init__(self, kind: str) -> None:
-        self.kind: Kind = KINDS[kind]
-
-    def __get_pydantic_core_schema__(self, source: Any, handler: Any) -> Any:
-        return core_schema.with_info_before_validator_function(self._validate, handler(source))
-
-    def _validate(self, value: Any, info: core_schema.ValidationInfo) -> float:
-        ctx = info.context or {}
-        plain = isinstance(value, (int, float)) and not isinstance(value, bool)
-        if plain and not ctx.get("from_file"):
-            if not math.isfinite(value):
-                raise QuantityError(f"is not finite; expected {self.kind.expectation}")
-            return float(value)
-        return convert_quantity(value, self.kind, ctx.get("atmospheric_pressure"))
-
-
-def _number(value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise QuantityError("is not a plain number; expected a number such as 1.4")
-    if not math.isfinite(value):
-        raise QuantityError("is not finite; expected a finite number")
-    return float(value)
-
-
-def _not_bool(value: Any) -> Any:
-    if isinstance(value, bool):
-        raise QuantityError("is a boolean; expected 1 or 2")
-    return value
-
-
-class _NumberField:
-    def __get_pydantic_core_schema__(self, source: Any, handler: Any) -> Any:
-        return core_schema.no_info_before_validator_function(_number, handler(source))
-
-
-def _format_bound(value: float, unit: str) -> str:
-    text = f"{value:.6g}"
-    return f"{text} {unit}" if unit else text
-
-
-class Bounds:
-    """Annotation marker: a finite value within a physically meaningful range.
-
-    The range is part of the field's JSON-schema description and of the error message,
-    which reads after the value, e.g. ``'1e300 in' should be greater than 0 m and at most
-    10 m``.
-
-    Parameters
-    ----------
-    lower, upper : float or None
-        Range ends in SI units (``None``: unbounded on that side).
-    unit : str
-        SI unit shown with the ends (``"m"``, ``"Pa"``); empty for plain numbers.
-    lower_inclusive, upper_inclusive : bool
-        Whether the ends themselves are allowed; by default the range is ``(lower,
-        upper]``.
-    lower_text, upper_text : str, optional
-        How to show an end when its number is awkward (``"5/3"``, ``"100 MPa"``).
-    """
-
-    def __init__(
-        self,
-        lower: float | None,
-        upper: float | None,
-        unit: str = "",
-        *,
-        lower_inclusive: bool = False,
-        upper_inclusive: bool = True,
-        lower_text: str | None = None,
-        upper_text: str | None = None,
-    ) -> None:
-        self.lower, self.upper, self.unit = lower, upper, unit
-        self.lower_inclusive, self.upper_inclusive = lower_inclusive, upper_inclusive
-        self.lower_text = lower_text or (
-            None if lower is None else _format_bound(lower, unit)
-        )
-        self.upper_text = upper_text or (
-            None if upper is None else _format_bound(upper, unit)
-        )
-
-    @property
-    def expectation(self) -> str:
-        """The range in words: ``"greater than 0 m and at most 10 m"``."""
-        parts = []
-        if self.lower_text is not None:
-            lower_word = "at least" if self.lower_inclusive else "greater than"
-            parts.append(f"{lower_word} {self.lower_text}")
-        if self.upper_text is not None:
-            upper_word = "at most" if self.upper_inclusive else "less than"
-            parts.append(f"{upper_word} {self.upper_text}")
-        return " and ".join(parts) if parts else "finite"
-
-    def contains(self, value: float) -> bool:
-        """Whether ``value`` is finite and within the range."""
-        if not math.isfinite(value):
-            return False
-        if self.lower is not None and (
-            value < self.lower or (value == self.lower and not self.lower_inclusive)
-        ):
-            return False
-        return self.upper is None or not (
-            value > self.upper or (value == self.upper and not self.upper_inclusive)
-        )
-
-    def _validate(self, value: Any) -> Any:
-        number = isinstance(value, (int, float)) and not isinstance(value, bool)
-        if number and not self.contains(float(value)):
-            raise QuantityError(f"should be {self.expectation}")
-        return value
-
-    def __get_pydantic_core_schema__(self, source: Any, handler: Any) -> Any:
-        return core_schema.no_info_after_validator_function(self._validate, handler(source))
-
-    def __get_pydantic_json_schema__(self, schema: Any, handler: Any) -> Any:
-        json_schema = handler(schema)
-        json_schema["description"] = f"finite, {self.expectation}"
-        return json_schema
-
-
-# --- physically meaningful ranges (SI), shared by the actuator and robot schemas -------
-#: Largest length of any part or placement [m].
-MAX_LENGTH = 10.0
-#: Largest absolute pressure [Pa] (100 MPa, far above any pneumatic component).
-MAX_PRESSURE = 100e6
-#: Highest temperature [K] (air at 2000 K is far outside any pneumatic use).
-MAX_TEMPERATURE = 2000.0
-#: Largest mass of a load, a link or a piston [kg].
-MAX_MASS = 1000.0
-#: Largest magnitude of a valve or controller voltage [V].
-MAX_VOLTAGE = 100.0
-#: Largest force of friction or of an end stop model [N].
-MAX_FORCE = 1e5
-#: Largest damping coefficient [N s/m].
-MAX_DAMPING = 1e7
-#: Largest stiffness [N/m].
-MAX_STIFFNESS = 1e10
-#: Largest time constant or other parameter time [s].
-MAX_TIME_CONSTANT = 10.0
-#: Largest gravity magnitude [m/s^2] (about ten times the Earth's).
-MAX_GRAVITY = 100.0
-
-
-def _positive(upper: float, unit: str = "", **kwargs: Any) -> Bounds:
-    return Bounds(0.0, upper, unit, **kwargs)
-
-
-def _non_negative(upper: float, unit: str = "", **kwargs: Any) -> Bounds:
-    return Bounds(0.0, upper, unit, lower_inclusive=True, **kwargs)
-
-
-def _symmetric(limit: float, unit: str = "", **kwargs: Any) -> Bounds:
-    return Bounds(-limit, limit, unit, lower_inclusive=True, **kwargs)
-
-
-Number = Annotated[float, _NumberField()]
-Pressure = Annotated[float, QuantityField("pressure")]
-Length = Annotated[float, QuantityField("length")]
-Area = Annotated[float, QuantityField("area")]
-Volume = Annotated[float, QuantityField("volume")]
-Mass = Annotated[float, QuantityField("mass")]
-Force = Annotated[float, QuantityField("force")]
-Time = Annotated[float, QuantityField("time")]
-Voltage = Annotated[float, QuantityField("voltage")]
-Conductance = Annotated[float, QuantityField("conductance")]
-Velocity = Annotated[float, QuantityField("velocity")]
-InverseVelocity = Annotated[float, QuantityField("inverse_velocity")]
-Acceleration = Annotated[float, QuantityField("acceleration")]
-
-#: Absolute pressure in (0, 100 MPa].
-AbsolutePressure = Annotated[Pressure, _positive(MAX_PRESSURE, "Pa", upper_text="100 MPa")]
-#: Length in (0, 10 m].
-PositiveLength = Annotated[Length, _positive(MAX_LENGTH, "m")]
-#: Length in [0, 10 m].
-NonNegativeLength = Annotated[Length, _non_negative(MAX_LENGTH, "m")]
-#: Mass in [0, 1000 kg].
-NonNegativeMass = Annotated[Mass, _non_negative(MAX_MASS, "kg")]
-#: Thermodynamic temperature in (0 K, 2000 K).
-Temperature = Annotated[
-    float,
-    QuantityField("temperature"),
-    Bounds(0.0, MAX_TEMPERATURE, "K", upper_inclusive=False),
-]
-#: Gas constant or specific heat in (0, 20000 J/(kg K)] (hydrogen's cp is 14300).
-SpecificHeat = Annotated[
-    float, QuantityField("specific_heat"), _positive(20000.0, "J/(kg*K)")
-]
-#: Valve or controller voltage in [-100 V, 100 V].
-BoundedVoltage = Annotated[Voltage, _symmetric(MAX_VOLTAGE, "V")]
-#: Damping coefficient in [0, 1e7 N s/m].
-Damping = Annotated[float, QuantityField("damping"), _non_negative(MAX_DAMPING, "N*s/m")]
-#: Stiffness in (0, 1e10 N/m].
-Stiffness = Annotated[float, QuantityField("stiffness"), _positive(MAX_STIFFNESS, "N/m")]
-#: Heat transfer coefficient in [0, 1e5 W/(m^2 K)].
-HeatTransfer = Annotated[
-    float, QuantityField("heat_transfer"), _non_negative(1e5, "W/(m^2*K)")
-]
-#: Time constant in [0, 10 s].
-TimeConstant = Annotated[Time, _non_negative(MAX_TIME_CONSTANT, "s")]
-#: Control step in [1 us, 1 s].
-ControlStep = Annotated[Time, Bounds(1e-6, 1.0, "s", lower_inclusive=True)]
-#: Area-polynomial coefficient in [-1e-3, 1e-3] m^2/V^n.
-AreaCoefficient = Annotated[Number, _symmetric(1e-3, "m^2/V^n")]
-Polynomial = tuple[AreaCoefficient, AreaCoefficient, AreaCoefficient, AreaCoefficient,
-                   AreaCoefficient]
-#: Iteration and step counts in [1, 1000].
-StepCount = Annotated[StrictInt, Bounds(1, 1000, lower_inclusive=True)]
-#: A dimensionless ratio in (0, 1).
-OpenFraction = Annotated[Number, Bounds(0.0, 1.0, upper_inclusive=False)]
-
-
-def described(description: str, source: str, default: Any = PydanticUndefined) -> Any:
-    """A field's meaning and its source in the thesis, for a model's field default.
-
-    The parameter reference (:mod:`pneumaquad.params.reference`, docs/parameters.md)
-    shows both beside the unit, range and default it reads from the field's type; the
-    JSON schema has them as ``description`` (followed by the range) and ``source``.
-
-    Parameters
-    ----------
-    description : str
-        What the value is, with its symbol and equation where the thesis has one.
-    source : str
-        Where the thesis gives it (``"eq 4.1.8; App. B.1.1 l.11"``), or ``"not in
-        thesis: ..."`` with what it is instead.
-    default : Any
-        The default value; without one the key is required.
-
-    Returns
-    -------
-    pydantic.fields.FieldInfo
-        To be assigned as the field's default.
-    """
-    return Field(default, description=description, json_schema_extra={"source": source})
-
-
-def _range_in_description(schema: dict[str, Any], model: type[BaseModel]) -> None:
-    """JSON schema: a bounded field's description ends with its range."""
-    properties = schema.get("properties", {})
-    for name, field in model.model_fields.items():
-        bounds = next((m for m in field.metadata if isinstance(m, Bounds)), None)
-        if bounds is not None and name in properties and field.description:
-            properties[name]["description"] = (
-                f"{field.description.rstrip('.')}; finite, {bounds.expectation}")
-
-
-class _Model(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid",
-                              json_schema_extra=_range_in_description)
 
 
 def _check(items: list[tuple[str, Any, str]]) -> None:
@@ -309,7 +87,7 @@ def _fail(key: str, value: Any, expected: str) -> None:
     raise CrossFieldError([(key, value, expected)])
 
 
-class Meta(_Model):
+class Meta(ParameterModel):
     """Set identification: ``name``, ``description``, ``source`` (free text)."""
 
     name: str = described(
@@ -323,7 +101,7 @@ class Meta(_Model):
         "not in thesis: bookkeeping")
 
 
-class GasParameters(_Model):
+class GasParameters(ParameterModel):
     """Air properties (thesis eq 4.1.4–4.1.11): k, R [J/(kg K)], cp, Ts [K], patm [Pa]."""
 
     heat_capacity_ratio: Annotated[
@@ -350,7 +128,7 @@ class GasParameters(_Model):
         "eq 4.1.4; App. B.1.1 l.34 (rig), App. C.1.1 (joints)")
 
 
-class SupplyParameters(_Model):
+class SupplyParameters(ParameterModel):
     """Supply [Pa absolute]; the tank fields are required only for ``model="tank"``."""
 
     model: Literal["ideal", "tank"] = described(
@@ -364,7 +142,7 @@ class SupplyParameters(_Model):
     exhaust_pressure: AbsolutePressure = described(
         "Exhaust pressure Pe the chambers discharge to, absolute.",
         "eq 4.1.3; App. B.1.1 l.25 (rig), App. C.1.1 (joints, measured)")
-    tank_volume: Annotated[Volume, _positive(10.0, "m^3")] | None = described(
+    tank_volume: Annotated[Volume, positive_bounds(10.0, "m^3")] | None = described(
         "Tank volume; required with `model = \"tank\"`.",
         "not in thesis: a typical portable cylinder in the shipped sets",
         default=None)
@@ -406,7 +184,7 @@ class SupplyParameters(_Model):
         return self
 
 
-class CylinderParameters(_Model):
+class CylinderParameters(ParameterModel):
     """Cylinder geometry [m, m², kg] (thesis App. B.1.1 lines 43–54)."""
 
     bore: PositiveLength = described(
@@ -426,7 +204,7 @@ class CylinderParameters(_Model):
         "Dead volume of the rod chamber as a length of the annulus (part of x_abs in eq 4.1.7, "
         "4.1.10).",
         "App. B.1.1 l.48 (rig, measured), App. C.1.1 (joints)")
-    slider_area: Annotated[Area, _non_negative(1.0, "m^2")] = described(
+    slider_area: Annotated[Area, non_negative_bounds(1.0, "m^2")] = described(
         "Area of the position sensor's slider, subtracted from the piston area: Ap = π·bore²/4 "
         "− slider_area.",
         "App. B.1.1 l.51–52 (rig), App. C.1.1 (joints)")
@@ -461,29 +239,29 @@ class CylinderParameters(_Model):
         return self
 
 
-class SimpleValveParameters(_Model):
+class SimpleValveParameters(ParameterModel):
     """Linear-area valve [m², V] and its ISO 6358 form [m³/(s·Pa)]."""
 
-    max_area: Annotated[Area, _positive(1.0, "m^2")] = described(
+    max_area: Annotated[Area, positive_bounds(1.0, "m^2")] = described(
         "Geometric orifice area A(u) of eq 4.1.1 at `full_scale_voltage` from the offset (the "
         "simple valve's linear area).",
         "App. B.2 l.13 (a 0.002 m × 0.005 m slot at 5 V)")
-    leak_area: Annotated[Area, _non_negative(1.0, "m^2")] = described(
+    leak_area: Annotated[Area, non_negative_bounds(1.0, "m^2")] = described(
         "Orifice area at the offset voltage.",
         "App. B.2 l.12")
-    full_scale_voltage: Annotated[Voltage, _positive(MAX_VOLTAGE, "V")] = described(
+    full_scale_voltage: Annotated[Voltage, positive_bounds(MAX_VOLTAGE, "V")] = described(
         "Voltage from the offset at which the area reaches `max_area`.",
         "App. B.2 l.13")
-    cap_discharge_coefficient: Annotated[Number, _positive(1.0)] = described(
+    cap_discharge_coefficient: Annotated[Number, positive_bounds(1.0)] = described(
         "Discharge coefficient cd of the cap port (eq 4.1.1).",
         "eq 4.1.1; App. B.1.1 l.39 (rig), App. C.1.1 (joints)")
-    rod_discharge_coefficient: Annotated[Number, _positive(1.0)] = described(
+    rod_discharge_coefficient: Annotated[Number, positive_bounds(1.0)] = described(
         "Discharge coefficient cd of the rod port (eq 4.1.1).",
         "eq 4.1.1; App. B.1.1 l.40 (rig), App. C.1.1 (joints)")
-    sonic_conductance: Annotated[Conductance, _positive(1e-5, "m^3/(s*Pa)")] = described(
+    sonic_conductance: Annotated[Conductance, positive_bounds(1e-5, "m^3/(s*Pa)")] = described(
         "ISO 6358 sonic conductance C at full opening (`flow_form = \"iso6358\"`).",
         "not in thesis: ISO 6358 flow form; the shipped value is illustrative")
-    leak_conductance: Annotated[Conductance, _non_negative(1e-5, "m^3/(s*Pa)")] = described(
+    leak_conductance: Annotated[Conductance, non_negative_bounds(1e-5, "m^3/(s*Pa)")] = described(
         "ISO 6358 sonic conductance at the offset voltage.",
         "not in thesis: ISO 6358 flow form; the shipped value is illustrative")
     iso_critical_ratio: Annotated[Number, Bounds(0.0, 1.0, lower_inclusive=True,
@@ -492,7 +270,7 @@ class SimpleValveParameters(_Model):
         "not in thesis: ISO 6358 flow form; the shipped value is illustrative")
 
 
-class ValvePortParameters(_Model):
+class ValvePortParameters(ParameterModel):
     """Underlapped port: area polynomials [m², highest power first], cutoffs [V]."""
 
     area_positive: Polynomial = described(
@@ -525,7 +303,7 @@ class ValvePortParameters(_Model):
         return self
 
 
-class ValveParameters(_Model):
+class ValveParameters(ParameterModel):
     """Proportional valve (MPYE-5): voltages [V], time constant [s], sub-tables."""
 
     model: Literal["underlapped", "simple"] = described(
@@ -588,7 +366,7 @@ class ValveParameters(_Model):
     @field_validator("cap_port", mode="before")
     @classmethod
     def _cap_port(cls, value: Any) -> Any:
-        return _not_bool(value)
+        return not_bool(value)
 
     @_model_validator(mode="after")
     def _cross(self) -> ValveParameters:
@@ -614,7 +392,7 @@ class ValveParameters(_Model):
         return self
 
 
-class FrictionParameters(_Model):
+class FrictionParameters(ParameterModel):
     """Friction models (thesis 4.2.2): forces [N], N·s/m, m/s, s/m, N/m."""
 
     model: Literal["stribeck_tanh", "viscous", "coulomb", "coulomb_viscous", "lugre"] = described(
@@ -622,23 +400,23 @@ class FrictionParameters(_Model):
         "`coulomb_viscous` (eq 4.2.4), or `lugre` (a bristle model that sticks; not in the "
         "thesis).",
         "thesis 4.2.2; App. B.1.1 l.60 (rig), App. C.1.1 (joints)")
-    static_force: Annotated[Force, _non_negative(MAX_FORCE, "N")] = described(
+    static_force: Annotated[Force, non_negative_bounds(MAX_FORCE, "N")] = described(
         "Static (breakaway) friction force Fs.",
         "eq 4.2.4, 4.2.6; App. B.1.1 l.61 (rig), App. C.1.1 (joints)")
-    coulomb_force: Annotated[Force, _non_negative(MAX_FORCE, "N")] = described(
+    coulomb_force: Annotated[Force, non_negative_bounds(MAX_FORCE, "N")] = described(
         "Coulomb friction force Fc; at most `static_force`.",
         "eq 4.2.1, 4.2.4, 4.2.6; App. B.1.1 l.62–63 (rig), App. C.1.1 (joints)")
     viscous_coefficient: Damping = described(
         "Viscous coefficient Cv of eq 4.2.4 and 4.2.6; LuGre's σ2.",
         "eq 4.2.6; App. B.1.1 l.64 (rig), App. C.1.1 (joints); its velocity unit is not "
         "printed, in/s taken (docs/physics.md)")
-    stribeck_velocity: Annotated[Velocity, _positive(10.0, "m/s")] = described(
+    stribeck_velocity: Annotated[Velocity, positive_bounds(10.0, "m/s")] = described(
         "Stribeck velocity vS.",
         "eq 4.2.6; App. B.1.1 l.67 (rig), App. C.1.1 (joints); unit not printed, in/s taken")
-    stribeck_exponent: Annotated[Number, _positive(10.0)] = described(
+    stribeck_exponent: Annotated[Number, positive_bounds(10.0)] = described(
         "Stribeck exponent i.",
         "eq 4.2.6; App. B.1.1 l.66 (rig), App. C.1.1 (joints)")
-    tanh_coefficient: Annotated[InverseVelocity, _positive(1e6, "s/m")] = described(
+    tanh_coefficient: Annotated[InverseVelocity, positive_bounds(1e6, "s/m")] = described(
         "Steepness k_tanh of the tanh about zero velocity.",
         "eq 4.2.6; App. B.1.1 l.65 (rig), App. C.1.1 (joints); unit not printed, s/in taken")
     damping_coefficient: Damping = described(
@@ -662,7 +440,7 @@ class FrictionParameters(_Model):
         return self
 
 
-class ThermodynamicsParameters(_Model):
+class ThermodynamicsParameters(ParameterModel):
     """Chamber thermodynamics: polytropic n, h [W/(m² K)], wall temperature [K]."""
 
     model: Literal["adiabatic", "polytropic", "heat_transfer"] = described(
@@ -682,7 +460,7 @@ class ThermodynamicsParameters(_Model):
         "not in thesis")
 
 
-class ActuatorParameters(_Model):
+class ActuatorParameters(ParameterModel):
     """One valve + cylinder actuator: every table except rig/controller/simulation."""
 
     meta: Meta = described(
@@ -741,7 +519,7 @@ def orientation_to_angle(orientation: str) -> float:
     return convert_quantity(orientation, "angle")
 
 
-class RigParameters(_Model):
+class RigParameters(ParameterModel):
     """Single-DoF test rig: load [kg], orientation, gravity, end stops, initial state."""
 
     load_mass: NonNegativeMass = described(
@@ -751,7 +529,7 @@ class RigParameters(_Model):
         "Direction of extension: `\"vertical_down\"`, `\"vertical_up\"`, `\"horizontal\"`, or "
         "an angle below the horizontal such as `\"30 deg\"`.",
         "App. B.1.1 (vertical, downward facing)")
-    gravity: Annotated[Acceleration, _non_negative(MAX_GRAVITY, "m/s^2")] = described(
+    gravity: Annotated[Acceleration, non_negative_bounds(MAX_GRAVITY, "m/s^2")] = described(
         "Gravitational acceleration.",
         "App. B.1.1 l.15")
     spacer: StrictBool = described(
@@ -790,28 +568,28 @@ class RigParameters(_Model):
         return orientation_to_angle(self.orientation)
 
 
-class ControllerParameters(_Model):
+class ControllerParameters(ParameterModel):
     """PID position controller: gains [V/m, V/(m s), V s/m], filter [s], clamp [V]."""
 
     proportional_gain: Annotated[
-        float, QuantityField("proportional_gain"), _non_negative(1e5, "V/m")
+        float, QuantityField("proportional_gain"), non_negative_bounds(1e5, "V/m")
     ] = described(
         "Proportional gain Kp: valve volts per metre of piston position error.",
         "not in thesis: the gains are not printed (our tuning)")
     integral_gain: Annotated[
-        float, QuantityField("integral_gain"), _non_negative(1e7, "V/(m*s)")
+        float, QuantityField("integral_gain"), non_negative_bounds(1e7, "V/(m*s)")
     ] = described(
         "Integral gain Ki.",
         "not in thesis: the gains are not printed (our tuning)")
     derivative_gain: Annotated[
-        float, QuantityField("derivative_gain"), _non_negative(1e4, "V*s/m")
+        float, QuantityField("derivative_gain"), non_negative_bounds(1e4, "V*s/m")
     ] = described(
         "Derivative gain Kd.",
         "not in thesis: the gains are not printed (our tuning)")
     derivative_filter_time_constant: TimeConstant = described(
         "Time constant of the first-order filter on the derivative term.",
         "not in thesis: our tuning")
-    integral_limit: Annotated[Voltage, _non_negative(MAX_VOLTAGE, "V")] = described(
+    integral_limit: Annotated[Voltage, non_negative_bounds(MAX_VOLTAGE, "V")] = described(
         "Anti-windup clamp on the integral term.",
         "not in thesis: our tuning")
 
@@ -825,14 +603,14 @@ class RigControllerParameters(ControllerParameters):
     robot's joint controllers have none): the PID sees the piston position of
     round(measurement_delay / control_step) control steps earlier."""
 
-    measurement_delay: Annotated[Time, _non_negative(MAX_MEASUREMENT_DELAY, "s")] = described(
+    measurement_delay: Annotated[Time, non_negative_bounds(MAX_MEASUREMENT_DELAY, "s")] = described(
         "Delay of the position the controller sees (a loop delay: sampling, filtering, "
         "transmission), rounded to whole control steps.",
         "not in thesis: its loop ran on an xPC target at 1 kHz; 0 s by default",
         0.0)
 
 
-class SimulationParameters(_Model):
+class SimulationParameters(ParameterModel):
     """Integration settings: control step [s], substeps, integrator, tolerances."""
 
     control_step: ControlStep = described(
@@ -855,7 +633,7 @@ class SimulationParameters(_Model):
         "not in thesis")
 
 
-class RigSetup(_Model):
+class RigSetup(ParameterModel):
     """A complete single-DoF rig run: actuator, rig, controller and simulation."""
 
     actuator: ActuatorParameters = described(

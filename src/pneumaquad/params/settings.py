@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from .schema import Bounds
+from .fields import Bounds
 
 __all__ = ["Setting", "check_settings"]
 
