@@ -21,9 +21,9 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 import typer
@@ -36,30 +36,32 @@ from pneumaquad.cli.common import (
     command_clock,
     command_group,
     console,
-    exit_if_interrupted,
     number_in,
     option_range,
     progress_bar,
     refuse_occupied_output,
-    report_command_time,
     stderr_console,
+)
+from pneumaquad.cli.robot_runs import (
+    progress_in_milliseconds,
+    report_run,
+    run_and_report,
+    sample_hook,
+    start_video_worker,
+    video_of_a_diverged_run,
 )
 from pneumaquad.cli.settings import option_names, settings_options
 from pneumaquad.cli.walk_outcome import print_walk_outcome
-from pneumaquad.io.interruption import InterruptCount, counted_interrupts
 from pneumaquad.io.stage_clock import StageClock
 from pneumaquad.locomotion.walk_settings import WALK_SETTINGS, WalkSettings
 from pneumaquad.params import JOINT_NAMES, load_robot
 from pneumaquad.params.fields import Bounds
-from pneumaquad.robot.errors import SimulationDivergedError
 from pneumaquad.robot.video import (
     DEFAULT_VIDEO_QUALITY,
     VIDEO_QUALITIES,
     RenderingUnavailableError,
-    VideoError,
 )
 from pneumaquad.robot.video_worker import (
-    RenderedVideo,
     VideoSettings,
     VideoWorker,
     VideoWorkerError,
@@ -138,203 +140,12 @@ def _refuse_short_supply(check, simulation, standing_angles, walking: bool) -> N
         raise typer.BadParameter(str(error), param_hint=SUPPLY_HINT) from None
 
 
-def _progress(update: Callable[[int, int], None]) -> Callable[[float, float], None]:
-    """A run's progress in simulated seconds for the progress bar (in milliseconds)."""
-    return lambda done, total: update(int(done * 1000), int(total * 1000))
-
-
-def _start_video(video: bool, fps: float, quality: str) -> VideoWorker | None:
-    """The command's video worker, started first so that it is ready (OpenGL chosen, MuJoCo
-    loaded) when the run begins; without ``video`` it renders only first-frame.png. None,
-    with a yellow warning, if it cannot start."""
-    try:
-        return VideoWorker(VideoSettings(fps=fps, quality=quality, gif=video))
-    except OSError as error:
-        what = "video" if video else "first-frame.png"
-        stderr_console.print(f"[yellow]no {what}: cannot start the video worker: {error}[/yellow]")
-        return None
-
-
-def _sample_hook(worker: VideoWorker | None, video: bool, simulation) -> dict[str, Any]:
-    """``on_sample=worker.add_sample`` for a video, after sending the model: the worker
-    renders while the run goes. Without a video nothing: the worker renders only
-    first-frame.png once the run has ended."""
-    if not video or worker is None:
-        return {}
-    worker.send_model(simulation.robot.to_xml())
-    return {"on_sample": worker.add_sample}
-
-
-def _run(simulation, phases, folder_option: Path | None, kind: str, description: str,
-         worker: VideoWorker | None, video: bool, clock: StageClock, profile: bool,
-         joints: list[str] | None = None) -> Path:
-    from pneumaquad.io.run_folder import create_run_folder
-    from pneumaquad.robot.experiment import run_phases
-
-    folder = create_run_folder(folder_option, kind)
-    with _video_of_a_diverged_run(worker, video), progress_bar(kind) as update:
-        run = run_phases(simulation, phases, folder, description, _progress(update),
-                         clock=clock, **_sample_hook(worker, video, simulation))
-    _report(simulation, run, description, worker, video, clock, profile, joints)
-    return folder
-
-
-def _report(simulation, run, description: str, worker: VideoWorker | None, video: bool,
-            clock: StageClock, profile: bool, joints: list[str] | None = None) -> None:
-    """Plots, video and key figures of a finished robot run; exit 130 if interrupted.
-
-    ``worker`` (:func:`_start_video`) renders the video, or only first-frame.png without
-    ``video``. It is told that the run has ended first (and stopped if the run was
-    interrupted), works while the plots are drawn, and is waited for at the end
-    (:func:`_wait_for_video`). Ctrl-C until then is counted, not raised
-    (:func:`~pneumaquad.io.interruption.counted_interrupts`), and acted on while waiting:
-    the plots and key figures are written whole, and the command exits with 130. The
-    command's real-time factor follows, and with ``profile`` where its wall time went
-    (``profile.json``).
-    """
-    folder = run.folder
-    with counted_interrupts() as ctrl_c:
-        if worker is not None:
-            worker.finish(folder, first_frame_only=not video, interrupted=run.interrupted)
-        with clock.stage("plots"):
-            _report_figures(simulation, run, description, joints)
-        with clock.stage("video (waiting for the worker)" if video else
-                         "first frame (waiting)"):
-            waited = _wait_for_video(worker, folder, first_frame_only=not video,
-                                     ctrl_c=ctrl_c)
-    if profile:
-        from pneumaquad.robot.profiling import split_simulation_time
-
-        steps = round(run.summary["simulated time [s]"] / simulation.control_step)
-        with clock.stage("profile (timing the parts of the simulation)"):
-            split_simulation_time(simulation, clock, steps)
-    report_command_time(folder, run.summary, clock, profile)
-    exit_if_interrupted(run.summary)  # the figures above are printed once
-    if not waited or ctrl_c.presses:
-        raise typer.Exit(130)
-
-
-def _report_figures(simulation, run, description: str, joints: list[str] | None) -> None:
-    """Plots and key figures of a finished robot run."""
-    from pneumaquad.reporting.robot_plots import plot_body, plot_joints
-
-    folder = run.folder
-    robot = simulation.robot
-    leg_joints = joints or [n for n in robot.joint_names if n.startswith("front_right")]
-    if run.recording["time [s]"].size > 1:
-        plot_joints(run.recording, leg_joints, folder / "joints.png", description)
-        if robot.free:
-            plot_body(run.recording, robot.legs, folder / "body.png", description)
-    summary = dict(run.summary)
-    console.print(f"run folder: [bold]{folder}[/bold]")
-    for key in ("simulated time [s]", "wall time [s]", "real-time factor", "air consumed [NL]",
-                "mean air flow [NL/min]", "tank endurance at this mean flow [s]"):
-        console.print(f"  {key}: {summary[key]:.6g}", markup=False, highlight=False)
-    for name, phase in summary["phases"].items():
-        console.print(
-            f"  phase {name}: {phase['duration [s]']:.3g} s, air "
-            f"{phase['mean air flow [NL/min]']:.3g} NL/min, tank lasts "
-            f"{phase['tank endurance at this flow [s]'] / 60.0:.4g} min",
-            markup=False, highlight=False,
-        )
-    for joint, error in summary["angle rmse [deg]"].items():
-        if joint in leg_joints:
-            console.print(f"  {joint} angle rmse [deg]: {error:.3g}", markup=False,
-                          highlight=False)
-    _print_checks(summary)
-
-
-def _print_checks(summary: dict[str, Any]) -> None:
-    """The verdicts of the run's stance checks (:class:`pneumaquad.robot.stance_check.
-    StanceCheck`) and where the run stopped because of one."""
-    for phase, verdict in summary.get("checks", {}).items():
-        if "verified" not in verdict:
-            continue
-        word = "verified" if verdict["verified"] else "[bold red]not verified[/bold red]"
-        console.print(
-            f"stance {'after the hold' if phase == 'stance check' else 'before ' + phase}: "
-            f"{word}: thorax {verdict['thorax height [m]']:.3f} m "
-            f"(target {verdict['target thorax height [m]']:.3f} m), largest joint error "
-            f"{verdict['largest joint error [deg]']:.1f}° "
-            f"({verdict['joint with the largest error']}), roll "
-            f"{verdict['thorax roll [deg]']:+.1f}°, pitch {verdict['thorax pitch [deg]']:+.1f}°",
-            highlight=False)
-    stopped = summary.get("stopped before")
-    if stopped is not None:
-        stderr_console.print(f"[yellow]stopped before {stopped['phase']}: {stopped['reason']}"
-                             "[/yellow]", highlight=False)
-
-
 def _check_environment(environment: str) -> None:
     from pneumaquad.robot.environment import ENVIRONMENTS
 
     if environment not in ENVIRONMENTS:
         raise typer.BadParameter(f"{environment!r}: expected one of {', '.join(ENVIRONMENTS)}",
                                  param_hint="--environment")
-
-
-def _wait_for_video(worker: VideoWorker | None, folder: Path, first_frame_only: bool = False,
-                    ctrl_c: InterruptCount | None = None) -> bool:
-    """Wait for the worker with a progress bar and print its video; False after Ctrl-C.
-
-    A Ctrl-C while waiting (with ``ctrl_c``: each one counted since, raised here) stops the
-    worker, which keeps the frames rendered so far (:meth:`VideoWorker.wait`); one after the
-    worker was stopped (also by an interrupted run) discards the video. A worker that fails
-    leaves a yellow warning (the run folder is complete without it).
-    """
-    what = "first-frame.png" if first_frame_only else "video"
-    if worker is None:
-        return True
-
-    def checked(update: Callable[[int, int], None] | None) -> Callable[[int, int], None]:
-        def progress(done: int, total: int) -> None:
-            if ctrl_c is not None:
-                ctrl_c.check()
-            if update is not None:
-                update(done, total)
-        return progress
-
-    try:
-        if first_frame_only:
-            worker.wait(checked(None))
-            return not worker.interrupted
-        with progress_bar("video frames") as update:
-            rendered = worker.wait(checked(update))
-    except KeyboardInterrupt:
-        hint = "" if first_frame_only else f"; `pneumaquad video {folder}` renders it"
-        stderr_console.print(f"[yellow]no {what}: interrupted again{hint}[/yellow]")
-        return False
-    except (RenderingUnavailableError, VideoError, VideoWorkerError) as error:
-        stderr_console.print(f"[yellow]no {what}: {error}[/yellow]")
-        return not worker.interrupted
-    _print_video(rendered, worker.settings, folder)
-    return not worker.interrupted
-
-
-def _print_video(rendered: RenderedVideo, settings: VideoSettings, folder: Path) -> None:
-    """The line of a rendered video: its file and frames, and for a video stopped early
-    (Ctrl-C, an interrupted or diverged run) how many of the frames due it holds."""
-    if rendered.complete:
-        console.print(f"video: {rendered.mp4} ({rendered.frames} frames at {settings.fps:g} "
-                      f"frames/s, {settings.quality} quality)")
-        return
-    stderr_console.print(
-        f"[yellow]video: {rendered.mp4} holds {rendered.frames} of {rendered.due} frames "
-        f"(stopped early, at {settings.fps:g} frames/s); `pneumaquad video {folder}` renders "
-        "them all[/yellow]")
-
-
-@contextlib.contextmanager
-def _video_of_a_diverged_run(worker: VideoWorker | None, video: bool) -> Iterator[None]:
-    """Around a run: if it diverges (its run folder written), the worker stops and its
-    frames so far become the run's video before the error goes on."""
-    try:
-        yield
-    except SimulationDivergedError as error:
-        if video and worker is not None and error.folder is not None:
-            worker.finish(error.folder, interrupted=True)
-            _wait_for_video(worker, error.folder)
-        raise
 
 
 @leg_app.command("validate")
@@ -381,12 +192,12 @@ def leg_validate(
     folders = []
     for tested in joints:
         for kind in signals:
-            worker = _start_video(video, video_fps, video_quality)
+            worker = start_video_worker(video, video_fps, video_quality)
             with worker or contextlib.nullcontext():
                 simulation = _simulation(clock, params, overrides, "fixed")
                 phases = leg_validation_phases(simulation, tested, kind, settle)
                 folder = base / f"{tested}-{kind}" if several else output
-                folders.append((tested, kind, _run(
+                folders.append((tested, kind, run_and_report(
                     simulation, phases, folder, f"leg-{tested}-{kind}",
                     f"front-right {tested}: {kind}", worker, video, clock, profile)))
                 clock = StageClock()  # the next run's stages (start-up counted once)
@@ -439,12 +250,12 @@ def leg_foot_cycle(
         raise typer.BadParameter(f"{rate!r}: expected slow, medium, fast or all",
                                  param_hint="--rate")
     settings = [*(overrides or []), f"controller.alpha.gain_scale={alpha_gain_scale!r}"]
-    with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
+    with start_video_worker(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
         simulation = _simulation(clock, params, settings, "fixed")
         phases = foot_cycle_phases(simulation, rates, cycles)
-        _run(simulation, phases, output, f"foot-cycle-{rate}",
-             f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", worker, video, clock,
-             profile)
+        run_and_report(simulation, phases, output, f"foot-cycle-{rate}",
+                       f"foot cycle ({rate}), alpha gain x{alpha_gain_scale:g}", worker, video,
+                       clock, profile)
 
 
 @robot_app.command("stand")
@@ -490,7 +301,7 @@ def robot_stand(
         raise typer.BadParameter(f"{configuration!r}: expected quadruped or testbed",
                                  param_hint="--configuration")
     _check_environment(environment)
-    with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
+    with start_video_worker(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
         simulation = _simulation(clock, params, overrides, configuration, environment, seed,
                                  supply)
         if configuration == "quadruped":
@@ -498,8 +309,8 @@ def robot_stand(
         staged = rise == "pairs" or (rise == "auto" and configuration == "quadruped"
                                      and rise_in_pairs(simulation, STANDING_ANGLES))
         phases = stand_up_phases(simulation, hold=hold, posture=posture, staged=staged)
-        _run(simulation, phases, output, f"{configuration}-stand",
-             f"{configuration}: stand up and hold", worker, video, clock, profile)
+        run_and_report(simulation, phases, output, f"{configuration}-stand",
+                       f"{configuration}: stand up and hold", worker, video, clock, profile)
 
 
 @robot_app.command("walk")
@@ -543,17 +354,18 @@ def robot_walk(
         raise typer.BadParameter(
             f"walking {distance:g} m at {speed:g} m/s takes {distance / speed:.4g} s; expected "
             f"at most {MAX_SIMULATED_TIME:g} s of walking", param_hint="--distance / --speed")
-    with _start_video(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
+    with start_video_worker(video, video_fps, video_quality) or contextlib.nullcontext() as worker:
         simulation = _simulation(clock, params, overrides, "quadruped", environment,
                                  seed)
         kind = f"walk-{environment}"
         try:
-            with _video_of_a_diverged_run(worker, video), progress_bar(kind) as update:
-                hooks = _sample_hook(worker, video, simulation)
-                walk = (run_walk(simulation, settings, output, progress=_progress(update),
-                                 clock=clock, **hooks) if points is None else
-                        run_waypoints(simulation, settings, points, output,
-                                      progress=_progress(update), clock=clock, **hooks))
+            with video_of_a_diverged_run(worker, video), progress_bar(kind) as update:
+                hooks = sample_hook(worker, video, simulation)
+                progress = progress_in_milliseconds(update)
+                walk = (run_walk(simulation, settings, output, progress=progress, clock=clock,
+                                 **hooks) if points is None else
+                        run_waypoints(simulation, settings, points, output, progress=progress,
+                                      clock=clock, **hooks))
         except WalkSettingsError as error:  # out of range, or a gait that cannot be planned
             hints = ["--waypoints"] if "waypoints" in error.fields else []
             fields = tuple(field for field in error.fields if field != "waypoints")
@@ -562,8 +374,8 @@ def robot_walk(
             raise typer.BadParameter(str(error), param_hint=", ".join(hints)) from None
         except InsufficientSupplyError as error:
             raise typer.BadParameter(str(error), param_hint=SUPPLY_HINT) from None
-        _report(simulation, walk.run, walk.run.summary["description"], worker, video, clock,
-                profile)
+        report_run(simulation, walk.run, walk.run.summary["description"], worker, video, clock,
+                   profile)
     print_walk_outcome(walk.outcome, settings, waypoints=points is not None)
 
 
