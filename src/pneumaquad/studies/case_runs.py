@@ -12,6 +12,7 @@ process runs it.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import shutil
 import tempfile
@@ -264,10 +265,8 @@ def _robot_batch(run: RunSpec, metrics: tuple[str, ...], cases: Sequence[Case],
         kept = runs_folder / f"case-{case.index:06d}" if runs_folder is not None else None
         folder = kept if kept is not None else Path(tempfile.mkdtemp(prefix="pneumaquad-case-"))
         try:
-            if kept is None:
-                with scratch_run_folders():  # read once and removed: no CSV, no plots
-                    figures, note = _robot_case(run, metrics, case, folder)
-            else:
+            # a folder read once and removed is scratch: no CSV, no plots
+            with scratch_run_folders() if kept is None else contextlib.nullcontext():
                 figures, note = _robot_case(run, metrics, case, folder)
             outcome = CaseOutcome(case.index, "ok", "", figures, note=note)
         except CaseInterruptedError:
